@@ -1,0 +1,10 @@
+// Everything an app needs: include this one header and link octbake::runtime.
+#pragma once
+#include "octbake/baked_file.h"
+#include "octbake/collide.h"
+#include "octbake/lod.h"
+#include "octbake/object_tree.h"
+#include "octbake/pose.h"
+#include "octbake/result.h"
+#include "octbake/world.h"
+#include "octbake/world_tree.h"

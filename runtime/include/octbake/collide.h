@@ -1,0 +1,39 @@
+// Conservative pair tests between two posed ObjectTrees.
+//
+// A simultaneous descent from the roots down to each object's own depth,
+// backtracking through every overlapping child pair until one leaf pair
+// overlaps (early out). Boxes are compared as oriented boxes (separating axis
+// test) in A's frame, from the relative transform computed in double, each box
+// padded by a relative epsilon: if the meshes touch, the test reports it at
+// every depth pair. Symmetric in a and b.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "octbake/object_tree.h"
+#include "octbake/pose.h"
+
+namespace octbake {
+
+struct PlacedTree {
+  const ObjectTree* tree = nullptr;
+  Pose pose;
+  int depth = 0;  // 0..tree->loaded_depth()
+};
+
+struct PairTest {
+  bool hit = false;
+  uint64_t box_tests = 0;  // box-box overlap tests done
+};
+
+struct LeafPair {
+  BoxCoord a, b;  // at the pair's depths
+};
+
+// Does any leaf of a (at a.depth) overlap any leaf of b (at b.depth)?
+PairTest collide(const PlacedTree& a, const PlacedTree& b);
+
+// Every overlapping leaf pair (no early out), for response and debugging.
+PairTest collide_all(const PlacedTree& a, const PlacedTree& b, std::vector<LeafPair>& out);
+
+}  // namespace octbake

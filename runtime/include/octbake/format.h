@@ -1,0 +1,55 @@
+// Encoding and decoding of baked files (schema/octbake.fbs), in memory.
+// The baker writes what encode_file() returns; BakedFile reads it mapped.
+#pragma once
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "octbake/octree.h"
+#include "octbake/result.h"
+
+namespace octbake {
+
+// Format-fixing: bump on any change to the schema's meaning. Readers accept
+// every version up to this one and refuse newer ones.
+constexpr uint32_t kFormatVersion = 1;
+constexpr const char* kFileIdentifier = "OCTB";
+
+enum class Compression : uint8_t { none = 0, zstd = 1 };
+
+struct BakeOptions {
+  int depth = 6;  // 1..12
+  Occupancy occupancy = Occupancy::surface;
+  Compression compression = Compression::zstd;
+  int compression_level = 19;
+  bool operator==(const BakeOptions&) const = default;
+};
+
+// Header of one tree: everything readable without decompressing.
+struct TreeInfo {
+  std::string name;
+  std::string source_hash;  // hex
+  BakeOptions options;
+  Aabb bounds;
+  int depth = 0;
+  uint64_t triangle_count = 0;
+  uint64_t vertex_count = 0;
+  std::vector<uint64_t> box_count;     // per level 0..depth
+  std::vector<uint64_t> stored_bytes;  // per level, as stored (compressed)
+  std::vector<uint64_t> raw_bytes;     // per level, decoded
+};
+
+struct TreeToEncode {
+  std::string name;
+  std::string source_hash;
+  BakeOptions options;
+  uint64_t triangle_count = 0;
+  uint64_t vertex_count = 0;
+  OctreeMasks masks;  // masks.depth() == options.depth
+};
+
+// Deterministic bytes for one or more trees (a pack when more than one).
+std::vector<uint8_t> encode_file(std::span<const TreeToEncode> trees, const std::string& baker_version);
+
+}  // namespace octbake

@@ -1,0 +1,46 @@
+// Pixel area (INTERFACE.md section 7) and the depth policies built on it.
+#pragma once
+#include <Eigen/Core>
+#include <span>
+#include <vector>
+
+#include "octbake/pose.h"
+
+namespace octbake {
+
+struct Camera {
+  Eigen::Vector3d position{0, 0, -10};
+  Eigen::Vector3d look_at{0, 0, 0};
+  Eigen::Vector3d up{0, 1, 0};
+  double fov_y_deg = 60;
+  int viewport_w = 1920, viewport_h = 1080;
+  double near_plane = 0.1, far_plane = 2000;
+};
+
+// Area in pixels of the convex outline of `box` projected through `camera`:
+// only the part in front of the near plane counts, clipped to the viewport;
+// 0 when wholly outside the view; the whole viewport when the box encloses the
+// camera. Always finite and >= 0.
+double pixel_area(const Camera& camera, const OrientedBox& box);
+
+enum class LodPolicy { fixed, thesis, screen };
+
+struct LodSettings {
+  LodPolicy policy = LodPolicy::screen;
+  int min_depth = 1;
+  int max_depth = 12;  // clamped per object to its baked/loaded depth
+  double pixel_tolerance = 1.0;
+};
+
+// floor(area / (a_min + a_max) * max_depth) + min_depth, clamped to
+// [min_depth, max_depth]; min_depth when a_min + a_max == 0.
+int thesis_depth(double area, double a_min, double a_max, int min_depth, int max_depth);
+// Smallest d in [min_depth, max_depth] with sqrt(area) / 2^d <= tolerance,
+// else max_depth.
+int screen_depth(double area, int min_depth, int max_depth, double tolerance);
+// One depth per object. `areas` are the objects' pixel areas; `max_depths`
+// each object's deepest usable depth (settings.max_depth is clamped to it).
+std::vector<int> choose_depths(const LodSettings& settings, std::span<const double> areas,
+                               std::span<const int> max_depths);
+
+}  // namespace octbake

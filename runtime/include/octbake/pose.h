@@ -1,0 +1,28 @@
+// Rigid placement of a mesh in the world: world = position + rotation * (scale * p).
+#pragma once
+#include <Eigen/Geometry>
+
+#include "octbake/octree.h"
+
+namespace octbake {
+
+struct Pose {
+  Eigen::Vector3d position{0, 0, 0};  // where the mesh's origin goes (double: huge worlds)
+  Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();  // unit
+  double scale = 1.0;                 // uniform, > 0
+
+  Eigen::Vector3d apply(const Eigen::Vector3d& p) const { return position + rotation * (scale * p); }
+};
+
+// A box in world space with its own axes (a posed local Aabb).
+struct OrientedBox {
+  Eigen::Vector3d center{0, 0, 0};
+  Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();  // columns: unit axes
+  Eigen::Vector3d half{0, 0, 0};                        // half extents, >= 0
+};
+
+OrientedBox place(const Aabb& local, const Pose& pose);
+// World axis-aligned bounds of a placed box.
+Aabb world_bounds(const OrientedBox& box);
+
+}  // namespace octbake

@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# Installs every Debian package the build, tests and benchmarks need.
+set -euo pipefail
+packages=(
+  build-essential cmake pkg-config git
+  libassimp-dev assimp-testmodels          # mesh import + real test meshes
+  libflatbuffers-dev flatbuffers-compiler  # baked file format
+  libeigen3-dev libzstd-dev                # math, level compression
+  libgtest-dev libbenchmark-dev            # tests, benchmarks
+  libfcl-dev liboctomap-dev                # exact oracle + peer benchmark
+  nlohmann-json3-dev libcli11-dev libstb-dev  # scene JSON, CLIs, PNG output
+  python3
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed' || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  sudo_cmd=(); [ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
+  "${sudo_cmd[@]}" apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq "${missing[@]}"
+fi
