@@ -1,1 +1,324 @@
-// placeholder: replaced by the scene implementation
+#include "scene.h"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <set>
+#include <sstream>
+#include <nlohmann/json.hpp>
+
+namespace octbake::scene {
+namespace {
+
+using nlohmann::json;
+
+constexpr const char* kFormat = "octbake-scene/1";
+constexpr double kUnitTolerance = 1e-6;
+constexpr int kMaxWorldDepth = 10;
+
+// Validation stops at the first problem; the exception never leaves this file.
+struct Invalid {
+  std::string message;
+};
+
+[[noreturn]] void fail(const std::string& path, const std::string& reason) {
+  throw Invalid{(path.empty() ? std::string("(root)") : path) + ": " + reason};
+}
+
+std::string join(const std::string& path, const std::string& key) {
+  return path.empty() ? key : path + "." + key;
+}
+
+std::string index(const std::string& path, size_t i) { return path + "[" + std::to_string(i) + "]"; }
+
+const char* type_name(const json& j) {
+  if (j.is_number()) return "number";
+  return j.type_name();
+}
+
+void check_keys(const json& obj, const std::string& path, std::initializer_list<const char*> allowed) {
+  if (!obj.is_object()) fail(path, std::string("expected an object, got ") + type_name(obj));
+  for (const auto& [key, value] : obj.items()) {
+    bool known = false;
+    for (const char* a : allowed) known = known || key == a;
+    if (!known) fail(join(path, key), "unknown key");
+  }
+}
+
+const json* find(const json& obj, const char* key) {
+  auto it = obj.find(key);
+  return it == obj.end() ? nullptr : &*it;
+}
+
+const json& require(const json& obj, const std::string& path, const char* key) {
+  const json* v = find(obj, key);
+  if (!v) fail(join(path, key), "missing required key");
+  return *v;
+}
+
+double number(const json& j, const std::string& path) {
+  if (!j.is_number()) fail(path, std::string("expected a number, got ") + type_name(j));
+  double v = j.get<double>();
+  if (!std::isfinite(v)) fail(path, "not a finite number");
+  return v;
+}
+
+int64_t integer(const json& j, const std::string& path) {
+  if (!j.is_number_integer()) fail(path, std::string("expected an integer, got ") + type_name(j));
+  if (j.is_number_unsigned() && j.get<uint64_t>() > static_cast<uint64_t>(INT64_MAX))
+    fail(path, "integer out of range");
+  return j.get<int64_t>();
+}
+
+std::string string(const json& j, const std::string& path) {
+  if (!j.is_string()) fail(path, std::string("expected a string, got ") + type_name(j));
+  std::string s = j.get<std::string>();
+  if (s.empty()) fail(path, "must not be empty");
+  return s;
+}
+
+template <size_t N>
+std::array<double, N> numbers(const json& j, const std::string& path) {
+  if (!j.is_array() || j.size() != N)
+    fail(path, "expected an array of " + std::to_string(N) + " numbers");
+  std::array<double, N> out{};
+  for (size_t i = 0; i < N; ++i) out[i] = number(j[i], index(path, i));
+  return out;
+}
+
+Eigen::Vector3d vec3(const json& j, const std::string& path) {
+  auto a = numbers<3>(j, path);
+  return {a[0], a[1], a[2]};
+}
+
+Camera parse_camera(const json& j, const std::string& path) {
+  check_keys(j, path, {"position", "look_at", "up", "fov_y_deg", "viewport", "near", "far"});
+  Camera c;
+  c.position = vec3(require(j, path, "position"), join(path, "position"));
+  c.look_at = vec3(require(j, path, "look_at"), join(path, "look_at"));
+  if (c.look_at == c.position) fail(join(path, "look_at"), "same as position");
+  if (const json* v = find(j, "up")) c.up = vec3(*v, join(path, "up"));
+  Eigen::Vector3d forward = (c.look_at - c.position).normalized();
+  if (c.up.norm() == 0 || forward.cross(c.up.normalized()).norm() < 1e-9)
+    fail(join(path, "up"), "zero or parallel to the view direction");
+  if (const json* v = find(j, "fov_y_deg")) {
+    c.fov_y_deg = number(*v, join(path, "fov_y_deg"));
+    if (!(c.fov_y_deg > 0 && c.fov_y_deg < 180)) fail(join(path, "fov_y_deg"), "must be in (0, 180)");
+  }
+  if (const json* v = find(j, "viewport")) {
+    std::string p = join(path, "viewport");
+    if (!v->is_array() || v->size() != 2) fail(p, "expected an array of 2 integers");
+    int64_t size[2];
+    for (size_t i = 0; i < 2; ++i) {
+      size[i] = integer((*v)[i], index(p, i));
+      if (size[i] <= 0 || size[i] > (1 << 20)) fail(index(p, i), "must be in 1..1048576");
+    }
+    c.viewport_w = static_cast<int>(size[0]);
+    c.viewport_h = static_cast<int>(size[1]);
+  }
+  if (const json* v = find(j, "near")) {
+    c.near_plane = number(*v, join(path, "near"));
+    if (!(c.near_plane > 0)) fail(join(path, "near"), "must be > 0");
+  }
+  if (const json* v = find(j, "far")) c.far_plane = number(*v, join(path, "far"));
+  if (!(c.far_plane > c.near_plane)) fail(join(path, "far"), "must be > near");
+  return c;
+}
+
+SceneObject parse_object(const json& j, const std::string& path) {
+  check_keys(j, path, {"name", "model", "position", "rotation", "scale", "velocity"});
+  SceneObject o;
+  o.name = string(require(j, path, "name"), join(path, "name"));
+  // Names go unquoted into the CSV log.
+  if (o.name.find_first_of(",\"\r\n") != std::string::npos)
+    fail(join(path, "name"), "must not contain a comma, a quote or a line break");
+  o.model = string(require(j, path, "model"), join(path, "model"));
+  o.pose.position = vec3(require(j, path, "position"), join(path, "position"));
+  if (const json* v = find(j, "rotation")) {
+    auto q = numbers<4>(*v, join(path, "rotation"));
+    Eigen::Quaterniond r(q[3], q[0], q[1], q[2]);  // [x, y, z, w] in the file
+    if (!(std::abs(r.norm() - 1) <= kUnitTolerance)) fail(join(path, "rotation"), "not a unit quaternion");
+    o.pose.rotation = r.normalized();
+  }
+  if (const json* v = find(j, "scale")) {
+    o.pose.scale = number(*v, join(path, "scale"));
+    if (!(o.pose.scale > 0)) fail(join(path, "scale"), "must be > 0");
+  }
+  if (const json* v = find(j, "velocity")) o.velocity = vec3(*v, join(path, "velocity"));
+  return o;
+}
+
+Scene parse(const json& root, const std::string& scene_dir) {
+  check_keys(root, "", {"format", "baked", "camera", "world", "timestep", "frames", "objects"});
+  Scene s;
+  std::string format = string(require(root, "", "format"), "format");
+  if (format != kFormat) fail("format", "expected \"" + std::string(kFormat) + "\", got \"" + format + "\"");
+
+  std::string baked = "baked";
+  if (const json* v = find(root, "baked")) baked = string(*v, "baked");
+  std::filesystem::path b(baked);
+  s.baked = (b.is_absolute() || scene_dir.empty()) ? baked : (std::filesystem::path(scene_dir) / b).string();
+
+  s.camera = parse_camera(require(root, "", "camera"), "camera");
+
+  const json& world = require(root, "", "world");
+  check_keys(world, "world", {"min", "max", "depth"});
+  s.world.min = vec3(require(world, "world", "min"), "world.min");
+  s.world.max = vec3(require(world, "world", "max"), "world.max");
+  for (int a = 0; a < 3; ++a)
+    if (!(s.world.min[a] < s.world.max[a])) fail("world.max", "must be > world.min on every axis");
+  if (const json* v = find(world, "depth")) {
+    int64_t d = integer(*v, "world.depth");
+    if (d < 0 || d > kMaxWorldDepth) fail("world.depth", "must be in 0..10");
+    s.world_depth = static_cast<int>(d);
+  }
+
+  s.timestep = number(require(root, "", "timestep"), "timestep");
+  if (!(s.timestep > 0)) fail("timestep", "must be > 0");
+  s.frames = integer(require(root, "", "frames"), "frames");
+  if (s.frames < 0) fail("frames", "must be >= 0");
+
+  const json& objects = require(root, "", "objects");
+  if (!objects.is_array()) fail("objects", std::string("expected an array, got ") + type_name(objects));
+  std::set<std::string> names;
+  for (size_t i = 0; i < objects.size(); ++i) {
+    std::string path = index("objects", i);
+    s.objects.push_back(parse_object(objects[i], path));
+    if (!names.insert(s.objects.back().name).second)
+      fail(join(path, "name"), "duplicate name \"" + s.objects.back().name + "\"");
+  }
+  return s;
+}
+
+// nlohmann keeps the last of duplicate keys; a scene must not say two things.
+// Tracks the path through the parse events to name the duplicate.
+class DuplicateKeyCheck {
+ public:
+  bool operator()(int, json::parse_event_t event, json& parsed) {
+    switch (event) {
+      case json::parse_event_t::object_start:
+      case json::parse_event_t::array_start:
+        stack_.push_back({event == json::parse_event_t::array_start, 0, {}, {}});
+        break;
+      case json::parse_event_t::object_end:
+      case json::parse_event_t::array_end:
+        if (!stack_.empty()) stack_.pop_back();
+        if (!stack_.empty() && stack_.back().is_array) ++stack_.back().count;
+        break;
+      case json::parse_event_t::key:
+        if (!stack_.empty() && parsed.is_string()) {
+          Frame& top = stack_.back();
+          top.key = parsed.get<std::string>();
+          if (!top.keys.insert(top.key).second && error.empty()) error = path() + ": duplicate key";
+        }
+        break;
+      case json::parse_event_t::value:
+        if (!stack_.empty() && stack_.back().is_array) ++stack_.back().count;
+        break;
+    }
+    return true;
+  }
+  std::string error;
+
+ private:
+  struct Frame {
+    bool is_array;
+    size_t count;
+    std::string key;
+    std::set<std::string> keys;
+  };
+  std::string path() const {
+    std::string p;
+    for (const Frame& f : stack_) p = f.is_array ? index(p, f.count) : join(p, f.key);
+    return p;
+  }
+  std::vector<Frame> stack_;
+};
+
+std::string line_column(const std::string& text, size_t byte) {
+  size_t line = 1, column = 1;
+  for (size_t i = 0; i + 1 < byte && i < text.size(); ++i) {
+    if (text[i] == '\n') {
+      ++line;
+      column = 1;
+    } else {
+      ++column;
+    }
+  }
+  return "line " + std::to_string(line) + ", column " + std::to_string(column);
+}
+
+}  // namespace
+
+Result<Scene> parse_scene(const std::string& json_text, const std::string& scene_dir) {
+  json root;
+  auto duplicates = std::make_shared<DuplicateKeyCheck>();
+  try {
+    root = json::parse(json_text, [duplicates](int depth, json::parse_event_t event, json& parsed) {
+      return (*duplicates)(depth, event, parsed);
+    });
+  } catch (const json::parse_error& e) {
+    // e.what() reads "[json.exception.parse_error.101] parse error at line L, column C: REASON".
+    std::string what = e.what();
+    size_t colon = what.find(": ");
+    std::string reason = colon == std::string::npos ? what : what.substr(colon + 2);
+    return Error{ErrorCode::invalid_argument,
+                 "invalid JSON at " + line_column(json_text, e.byte) + ": " + reason};
+  }
+  if (!duplicates->error.empty()) return Error{ErrorCode::invalid_argument, duplicates->error};
+  try {
+    return parse(root, scene_dir);
+  } catch (const Invalid& e) {
+    return Error{ErrorCode::invalid_argument, e.message};
+  } catch (const json::exception& e) {
+    return Error{ErrorCode::invalid_argument, e.what()};  // not expected: every access is checked
+  }
+}
+
+Result<Scene> load_scene(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Error{ErrorCode::not_found, path + ": cannot open"};
+  std::stringstream text;
+  text << in.rdbuf();
+  if (in.bad()) return Error{ErrorCode::io_error, path + ": read failed"};
+  Result<Scene> s = parse_scene(text.str(), std::filesystem::path(path).parent_path().string());
+  if (!s) return Error{s.error().code, path + ": " + s.error().message};
+  return s;
+}
+
+std::string write_scene(const Scene& scene, const std::string& baked) {
+  using json = nlohmann::ordered_json;  // keys in the order written
+  auto v3 = [](const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); };
+  json camera = {
+      {"position", v3(scene.camera.position)},  {"look_at", v3(scene.camera.look_at)},
+      {"up", v3(scene.camera.up)},              {"fov_y_deg", scene.camera.fov_y_deg},
+      {"viewport", {scene.camera.viewport_w, scene.camera.viewport_h}},
+      {"near", scene.camera.near_plane},        {"far", scene.camera.far_plane}};
+  json world = {{"min", v3(scene.world.min)}, {"max", v3(scene.world.max)}, {"depth", scene.world_depth}};
+  // nlohmann prints doubles in the shortest form that reads back exactly, in
+  // the "C" locale.
+  std::string out = "{\n";
+  out += "  \"format\": " + json(kFormat).dump() + ",\n";
+  out += "  \"baked\": " + json(baked).dump() + ",\n";
+  out += "  \"camera\": " + camera.dump() + ",\n";
+  out += "  \"world\": " + world.dump() + ",\n";
+  out += "  \"timestep\": " + json(scene.timestep).dump() + ",\n";
+  out += "  \"frames\": " + json(scene.frames).dump() + ",\n";
+  out += "  \"objects\": [";
+  for (size_t i = 0; i < scene.objects.size(); ++i) {
+    const SceneObject& o = scene.objects[i];
+    const Eigen::Quaterniond& q = o.pose.rotation;
+    json j = {{"name", o.name},
+              {"model", o.model},
+              {"position", v3(o.pose.position)},
+              {"rotation", {q.x(), q.y(), q.z(), q.w()}},
+              {"scale", o.pose.scale},
+              {"velocity", v3(o.velocity)}};
+    out += (i ? ",\n    " : "\n    ") + j.dump();
+  }
+  out += scene.objects.empty() ? "]\n}\n" : "\n  ]\n}\n";
+  return out;
+}
+
+}  // namespace octbake::scene

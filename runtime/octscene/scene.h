@@ -33,4 +33,9 @@ struct Scene {
 Result<Scene> parse_scene(const std::string& json_text, const std::string& scene_dir);
 Result<Scene> load_scene(const std::string& path);
 
+// The scene as JSON that parse_scene() accepts, one object per line; numbers
+// are printed so they read back to the same doubles. `baked` is written as
+// given (Scene::baked holds the resolved path).
+std::string write_scene(const Scene& scene, const std::string& baked);
+
 }  // namespace octbake::scene
