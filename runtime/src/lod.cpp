@@ -1,0 +1,49 @@
+// Depth policies (INTERFACE.md section 5).
+#include "octbake/lod.h"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+
+namespace octbake {
+
+int thesis_depth(double area, double a_min, double a_max, int min_depth, int max_depth) {
+  const int lo = std::min(min_depth, max_depth);
+  const double sum = a_min + a_max;
+  if (!(sum > 0)) return lo;
+  const double d = std::floor(area / sum * max_depth) + min_depth;
+  if (!(d >= lo)) return lo;  // also NaN
+  return d >= max_depth ? max_depth : int(d);
+}
+
+int screen_depth(double area, int min_depth, int max_depth, double tolerance) {
+  const double side = std::sqrt(area);
+  for (int d = std::min(min_depth, max_depth); d < max_depth; ++d)
+    if (side / std::ldexp(1.0, d) <= tolerance) return d;  // exact: division by 2^d
+  return max_depth;
+}
+
+std::vector<int> choose_depths(const LodSettings& settings, std::span<const double> areas,
+                               std::span<const int> max_depths) {
+  assert(areas.size() == max_depths.size());
+  double a_min = 0, a_max = 0;
+  if (!areas.empty()) {
+    const auto [lo, hi] = std::minmax_element(areas.begin(), areas.end());
+    a_min = *lo;
+    a_max = *hi;
+  }
+  std::vector<int> depths(areas.size());
+  for (size_t i = 0; i < areas.size(); ++i) {
+    // The LOD range, clamped to what this object has.
+    const int hi = std::max(0, std::min(settings.max_depth, max_depths[i]));
+    const int lo = std::clamp(settings.min_depth, 0, hi);
+    switch (settings.policy) {
+      case LodPolicy::fixed: depths[i] = hi; break;
+      case LodPolicy::thesis: depths[i] = thesis_depth(areas[i], a_min, a_max, lo, hi); break;
+      case LodPolicy::screen: depths[i] = screen_depth(areas[i], lo, hi, settings.pixel_tolerance); break;
+    }
+  }
+  return depths;
+}
+
+}  // namespace octbake
