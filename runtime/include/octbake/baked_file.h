@@ -20,17 +20,21 @@ namespace octbake {
 
 // Work counters, so tests can assert how much a load did.
 struct LoadStats {
-  uint64_t files_opened = 0;
-  uint64_t bytes_mapped = 0;
-  uint64_t levels_decoded = 0;
-  uint64_t bytes_decompressed = 0;
+  uint64_t files_opened = 0;        // BakedFile::open calls that succeeded
+  uint64_t bytes_mapped = 0;        // their file sizes (from_bytes maps nothing)
+  uint64_t levels_decoded = 0;      // levels 1..d produced by load()
+  uint64_t bytes_decompressed = 0;  // decoded bytes of those levels (raw ones copied)
 };
 
 class BakedFile {
  public:
+  // Errors: not_found (no such file), io_error, truncated (shorter than its
+  // size prefix, or than any octbake file), bad_identifier, unsupported_version
+  // (newer than kFormatVersion), corrupt (verifier or a count/size check).
   static Result<BakedFile> open(const std::string& path);
-  // Same checks for bytes already in memory (tests, fuzzing). The bytes must
-  // outlive the BakedFile.
+  // Same checks for bytes already in memory (tests, fuzzing); `label` names
+  // them in messages. The bytes must outlive the BakedFile (misaligned bytes
+  // are copied once, since the header holds doubles).
   static Result<BakedFile> from_bytes(std::span<const uint8_t> bytes, const std::string& label);
 
   BakedFile(BakedFile&&) noexcept;
@@ -45,6 +49,9 @@ class BakedFile {
   // Index of the tree named `name`, or not_found.
   Result<size_t> find(const std::string& name) const;
   // Decodes tree `index` down to min(depth, baked depth): levels 1..depth only.
+  // Errors: invalid_argument (index out of range, depth < 0),
+  // decompress_failed (broken frame, or one that lies about its size),
+  // corrupt (decoded masks disagree with the header's box counts).
   Result<ObjectTree> load(size_t index, int depth) const;
   const LoadStats& stats() const;
 
@@ -58,7 +65,9 @@ class BakedFile {
 // only the files that hold them.
 class ModelLibrary {
  public:
-  // `source`: a folder (model "x" is "<folder>/x.oct") or a pack file.
+  // `source`: a folder (model "x" is "<folder>/x.oct", opened when first
+  // asked for; a file holding a single tree of another name still serves it)
+  // or a pack file (opened now, trees found by name). not_found when missing.
   static Result<ModelLibrary> open(const std::string& source);
   // Loads model `name` down to `depth` (clamped to its baked depth).
   Result<ObjectTree> load(const std::string& name, int depth);

@@ -15,6 +15,8 @@ namespace octbake {
 // every version up to this one and refuse newer ones.
 constexpr uint32_t kFormatVersion = 1;
 constexpr const char* kFileIdentifier = "OCTB";
+// Deepest level a file may hold: 8^12 boxes is far past any useful tree.
+constexpr int kMaxDepth = 12;
 
 enum class Compression : uint8_t { none = 0, zstd = 1 };
 
@@ -49,7 +51,13 @@ struct TreeToEncode {
   OctreeMasks masks;  // masks.depth() == options.depth
 };
 
-// Deterministic bytes for one or more trees (a pack when more than one).
+// Deterministic bytes for one or more trees (a pack when more than one): the
+// same trees, baker version and libzstd version give the same bytes. Each
+// level is one zstd frame at options.compression_level, or raw when
+// compression is none or the frame would not be smaller.
+// Preconditions (asserted): at least one tree; unique, non-empty names;
+// masks.depth() == options.depth in 1..kMaxDepth; masks[d].size() equal to
+// the box count of depth d; finite bounds with min <= max.
 std::vector<uint8_t> encode_file(std::span<const TreeToEncode> trees, const std::string& baker_version);
 
 }  // namespace octbake

@@ -1,0 +1,102 @@
+// encode_file(): TreeToEncode -> the bytes of schema/octbake.fbs.
+#include "octbake/format.h"
+
+#include <zstd.h>
+
+#include <cassert>
+#include <cmath>
+#include <memory>
+#include <set>
+
+#include "octbake_generated.h"
+
+namespace octbake {
+namespace {
+
+// The public enums mirror the schema's, value for value.
+static_assert(uint8_t(Compression::none) == uint8_t(fb::Compression::None));
+static_assert(uint8_t(Compression::zstd) == uint8_t(fb::Compression::Zstd));
+static_assert(uint8_t(Occupancy::surface) == uint8_t(fb::Occupancy::Surface));
+static_assert(uint8_t(Occupancy::solid) == uint8_t(fb::Occupancy::Solid));
+static_assert(uint8_t(Occupancy::vertices) == uint8_t(fb::Occupancy::Vertices));
+
+using CCtxPtr = std::unique_ptr<ZSTD_CCtx, decltype(&ZSTD_freeCCtx)>;
+
+// One zstd frame with the same bytes on every run: single-threaded, content
+// size and checksum recorded, no dictionary id, nothing time-dependent.
+std::vector<uint8_t> zstd_frame(ZSTD_CCtx* cctx, std::span<const uint8_t> raw, int level) {
+  ZSTD_CCtx_reset(cctx, ZSTD_reset_session_and_parameters);
+  ZSTD_CCtx_setParameter(cctx, ZSTD_c_compressionLevel, level);
+  ZSTD_CCtx_setParameter(cctx, ZSTD_c_contentSizeFlag, 1);
+  ZSTD_CCtx_setParameter(cctx, ZSTD_c_checksumFlag, 1);
+  ZSTD_CCtx_setParameter(cctx, ZSTD_c_dictIDFlag, 0);
+  ZSTD_CCtx_setParameter(cctx, ZSTD_c_nbWorkers, 0);
+  std::vector<uint8_t> frame(ZSTD_compressBound(raw.size()));
+  const size_t n = ZSTD_compress2(cctx, frame.data(), frame.size(), raw.data(), raw.size());
+  assert(!ZSTD_isError(n));  // the bound always fits
+  frame.resize(ZSTD_isError(n) ? 0 : n);
+  return frame;
+}
+
+flatbuffers::Offset<fb::Tree> encode_tree(flatbuffers::FlatBufferBuilder& fbb, ZSTD_CCtx* cctx,
+                                          const TreeToEncode& tree) {
+  const OctreeMasks& masks = tree.masks;
+  const int depth = masks.depth();
+  assert(depth == tree.options.depth && depth >= 1 && depth <= kMaxDepth);
+  assert(!tree.name.empty());
+  assert(masks.bounds.min.allFinite() && masks.bounds.max.allFinite());
+  assert((masks.bounds.min.array() <= masks.bounds.max.array()).all());
+
+  std::vector<flatbuffers::Offset<fb::Level>> levels;
+  levels.push_back(fb::CreateLevel(fbb, /*box_count=*/1, /*raw_size=*/0, fb::Compression::None,
+                                   fbb.CreateVector(std::vector<uint8_t>{})));
+  for (int d = 1; d <= depth; ++d) {
+    const std::vector<uint8_t>& raw = masks.masks[d - 1];
+    assert(raw.size() == masks.box_count(d - 1));
+    fb::Compression stored = fb::Compression::None;
+    flatbuffers::Offset<flatbuffers::Vector<uint8_t>> data;
+    if (tree.options.compression == Compression::zstd) {
+      std::vector<uint8_t> frame = zstd_frame(cctx, raw, tree.options.compression_level);
+      if (!frame.empty() && frame.size() < raw.size()) {
+        stored = fb::Compression::Zstd;
+        data = fbb.CreateVector(frame);
+      }
+    }
+    if (stored == fb::Compression::None) data = fbb.CreateVector(raw);
+    levels.push_back(fb::CreateLevel(fbb, masks.box_count(d), raw.size(), stored, data));
+  }
+  const auto levels_offset = fbb.CreateVector(levels);
+  const auto name = fbb.CreateString(tree.name);
+  const auto source_hash = fbb.CreateString(tree.source_hash);
+  const auto options =
+      fb::CreateBakeOptions(fbb, static_cast<uint8_t>(depth), static_cast<fb::Occupancy>(tree.options.occupancy),
+                            static_cast<fb::Compression>(tree.options.compression), tree.options.compression_level);
+  const fb::Vec3 lo(masks.bounds.min.x(), masks.bounds.min.y(), masks.bounds.min.z());
+  const fb::Vec3 hi(masks.bounds.max.x(), masks.bounds.max.y(), masks.bounds.max.z());
+  return fb::CreateTree(fbb, name, source_hash, options, &lo, &hi, static_cast<uint8_t>(depth), tree.triangle_count,
+                        tree.vertex_count, levels_offset);
+}
+
+}  // namespace
+
+std::vector<uint8_t> encode_file(std::span<const TreeToEncode> trees, const std::string& baker_version) {
+  assert(!trees.empty());
+#ifndef NDEBUG
+  std::set<std::string> names;
+  for (const TreeToEncode& t : trees) assert(names.insert(t.name).second && "tree names must be unique");
+#endif
+  // Every field written, even when it equals its default, so the layout does
+  // not depend on the values.
+  flatbuffers::FlatBufferBuilder fbb(4096);
+  fbb.ForceDefaults(true);
+  CCtxPtr cctx(ZSTD_createCCtx(), ZSTD_freeCCtx);
+  std::vector<flatbuffers::Offset<fb::Tree>> offsets;
+  offsets.reserve(trees.size());
+  for (const TreeToEncode& t : trees) offsets.push_back(encode_tree(fbb, cctx.get(), t));
+  const auto trees_offset = fbb.CreateVector(offsets);
+  const auto version = fbb.CreateString(baker_version);
+  fb::FinishSizePrefixedFileBuffer(fbb, fb::CreateFile(fbb, kFormatVersion, version, trees_offset));
+  return {fbb.GetBufferPointer(), fbb.GetBufferPointer() + fbb.GetSize()};
+}
+
+}  // namespace octbake
