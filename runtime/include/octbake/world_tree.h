@@ -2,8 +2,23 @@
 // ids; objects sharing a leaf are candidate pairs. An object may sit in several
 // leaves. Objects (partly) outside the bounds also go to an overflow set that
 // is paired with everything, so nothing is ever dropped.
+//
+// Only the leaf level is stored (a uniform grid of 2^depth cells per axis), and
+// only cells that hold something: a sparse table of cells plus, per object,
+// the cells it sits in. An object whose cell range exceeds kMaxCells (a ground
+// plane in a deep world) joins the overflow set instead of filling thousands
+// of cells. Overflow objects are in no cell.
+//
+// Pairs are reported without duplicates and without a global sort: a pair is
+// emitted only by its *first common cell*, the cell (max of both objects' min
+// cell, per axis), which both objects hold whenever they share any cell. Pairs
+// are gathered per object a (each b > a), so sorting each object's short list
+// leaves the whole output sorted. Cost: the sum over cells of (occupants)^2,
+// i.e. the true candidate set, plus |overflow| * |objects|.
 #pragma once
+#include <array>
 #include <cstdint>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -13,29 +28,62 @@ namespace octbake {
 
 class WorldTree {
  public:
+  // depth 0..10 (cells per axis = 2^depth). The world box must have a positive
+  // extent on every axis.
   WorldTree(const Aabb& world, int depth);
 
-  // Inserts object `id` or moves it to `box`. Returns true when its leaf set
-  // (or overflow membership) changed, false when nothing needed re-inserting.
-  bool update(uint32_t id, const Aabb& box);
-  void remove(uint32_t id);
+  // An object spanning more cells than this is paired with everything instead.
+  static constexpr uint64_t kMaxCells = 1024;
 
-  // Candidate pairs (a < b), each once, sorted ascending.
+  // Inserts object `id` or moves it to `box`. Returns true when its leaf set
+  // (the cell range its box covers, clamped to the grid) or its overflow
+  // membership changed, false when nothing needed re-inserting. A move that
+  // returns true counts one reinsertion; a first insertion does not. `box`
+  // must not hold NaN.
+  bool update(uint32_t id, const Aabb& box);
+  void remove(uint32_t id);  // no-op for an absent id
+
+  // Candidate pairs (a < b), each once, sorted ascending: every two objects
+  // sharing a cell, plus every overflow object with every other object.
+  // `out` is cleared first.
   void candidate_pairs(std::vector<std::pair<uint32_t, uint32_t>>& out) const;
 
   int depth() const { return depth_; }
   const Aabb& bounds() const { return world_; }
   uint64_t reinsertions() const { return reinsertions_; }
+  bool contains(uint32_t id) const { return id < entries_.size() && entries_[id].present; }
+  bool in_overflow(uint32_t id) const { return contains(id) && entries_[id].overflow; }
 
  private:
-  struct Entry;
+  using Coord = std::array<uint16_t, 3>;
+  struct Entry {
+    Coord lo{}, hi{};  // inclusive cell range, clamped to the grid
+    bool present = false;
+    bool overflow = false;
+    std::vector<uint32_t> cells;  // slots in cells_ (empty when overflow)
+  };
+  struct Cell {
+    Coord at{};
+    std::vector<uint32_t> ids;  // sorted ascending
+  };
+
+  Coord cell_of(const Eigen::Vector3d& p) const;
+  void unlink(uint32_t id);
+  void link(uint32_t id);
+  uint32_t cell_slot(uint32_t x, uint32_t y, uint32_t z);
+
   Aabb world_;
   int depth_;
+  uint32_t side_;  // cells per axis
+  Eigen::Vector3d inv_cell_;
   uint64_t reinsertions_ = 0;
-  // Implementation state lives in world_tree.cpp (owned by the runtime).
-  std::vector<std::vector<uint32_t>> cells_;  // leaf -> ids
-  std::vector<std::array<uint32_t, 6>> ranges_;  // id -> leaf range [lo, hi) per axis
-  std::vector<uint8_t> present_, overflow_;
+  std::vector<Entry> entries_;  // by id
+  std::vector<Coord> lo_;       // hot copy of entries_[id].lo for the pair loop
+  std::vector<Cell> cells_;
+  std::vector<uint32_t> free_cells_;                // emptied slots, reused LIFO
+  std::unordered_map<uint32_t, uint32_t> cell_index_;  // packed coord -> slot; never iterated
+  std::vector<uint32_t> overflow_ids_;              // sorted
+  std::vector<uint32_t> present_ids_;               // sorted
 };
 
 }  // namespace octbake
