@@ -1,2 +1,68 @@
+// octbake: bakes meshes into ObjectTree files (INTERFACE.md section 2).
+// Exit status: 0 all baked, 1 an input failed, 2 bad usage.
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdio>
-int main() { std::fputs("not built yet\n", stderr); return 2; }
+#include <thread>
+
+#include "bake.h"
+#include "cli.h"
+
+int main(int argc, char** argv) {
+  using namespace octbake;
+  CLI::App app{"Bakes meshes (any format assimp reads) into conservative octree files (.oct).", "octbake"};
+  app.set_version_flag("--version", OCTBAKE_VERSION);
+
+  BakeConfig config;
+  config.jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  std::vector<std::string> info_files;
+  std::string occupancy = "surface", compress = "zstd:19";
+  bool quiet = false;
+
+  app.add_option("FILE", config.inputs, "Mesh files to bake");
+  auto* out = app.add_option("-o,--out", config.out_dir, "One baked file per input: DIR/<stem>.oct")
+                  ->capture_default_str();
+  app.add_option("--pack", config.pack, "All inputs into this one pack file instead")->excludes(out);
+  app.add_option("-d,--depth", config.options.depth, "Deepest level baked, 1..12")
+      ->check(CLI::Range(1, 12))
+      ->capture_default_str();
+  app.add_option("--occupancy", occupancy, "surface|solid|vertices")
+      ->check(CLI::IsMember({"surface", "solid", "vertices"}))
+      ->capture_default_str();
+  app.add_option("--compress", compress, "zstd[:LEVEL] (LEVEL 1..22) or none")
+      ->check(CLI::Validator(
+          [](std::string& v) { return parse_compression(v) ? std::string() : "expected zstd[:1..22] or none, got " + v; },
+          "zstd[:LEVEL]|none"))
+      ->capture_default_str();
+  app.add_option("-j,--jobs", config.jobs, "Files baked in parallel (default: all cores)")->check(CLI::Range(1, 4096));
+  app.add_flag("--force", config.force, "Rebake even when the output is up to date");
+  app.add_option("--info", info_files, "Print what baked files hold and exit");
+  app.add_option("--export-obj", config.export_obj_dir, "Also write each tree's boxes per depth as DIR/<stem>_d<depth>.obj");
+  app.add_flag("-q,--quiet", quiet, "No progress display");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
+    std::string message = e.what();
+    std::replace(message.begin(), message.end(), '\n', ' ');
+    std::fprintf(stderr, "octbake: error: %s (see octbake --help)\n", message.c_str());
+    return 2;
+  }
+
+  if (!info_files.empty()) {
+    info_files.insert(info_files.end(), config.inputs.begin(), config.inputs.end());
+    return print_info(info_files, stdout, stderr);
+  }
+  if (config.inputs.empty()) {
+    std::fputs("octbake: error: no input files (see octbake --help)\n", stderr);
+    return 2;
+  }
+  config.options.occupancy = *parse_occupancy(occupancy);
+  std::tie(config.options.compression, config.options.compression_level) = *parse_compression(compress);
+  config.progress = !quiet && ::isatty(STDERR_FILENO);
+  const BakeSummary summary = run_bake(config, stderr);
+  return summary.failed == 0 ? 0 : 1;
+}

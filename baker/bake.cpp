@@ -1,0 +1,420 @@
+#include "bake.h"
+
+#include <algorithm>
+#include <atomic>
+#include <charconv>
+#include <chrono>
+#include <exception>
+#include <filesystem>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <thread>
+#include <utility>
+
+#include "build_tree.h"
+#include "cli.h"
+#include "import.h"
+#include "octbake/baked_file.h"
+#include "write.h"
+
+namespace octbake {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+enum class Outcome : uint8_t { pending, baked, up_to_date, failed };
+
+struct Input {
+  std::string path;    // as given on the command line
+  std::string name;    // tree name: the file's stem
+  std::string output;  // per-file mode: DIR/<name>.oct
+  std::string hash;
+  std::optional<TreeToEncode> tree;  // pack mode: baked, waiting to be packed
+};
+
+std::string human_rate(double per_second) {
+  char buf[32];
+  if (per_second >= 1e6)
+    std::snprintf(buf, sizeof buf, "%.1fM", per_second / 1e6);
+  else if (per_second >= 1e3)
+    std::snprintf(buf, sizeof buf, "%.1fK", per_second / 1e3);
+  else
+    std::snprintf(buf, sizeof buf, "%.0f", per_second);
+  return buf;
+}
+
+// Collects outcomes from the workers. Error lines go out in input order: the
+// line of input i waits until every earlier input has finished.
+class Reporter {
+ public:
+  Reporter(size_t n, std::FILE* err, bool progress)
+      : outcome_(n, Outcome::pending), error_(n), err_(err), progress_(progress), start_(Clock::now()) {}
+
+  void finish(size_t i, Outcome outcome, std::string error = {}, uint64_t triangles = 0) {
+    std::lock_guard lock(mu_);
+    outcome_[i] = outcome;
+    error_[i] = std::move(error);
+    triangles_ += triangles;
+    ++done_;
+    clear_line();
+    for (; emitted_ < outcome_.size() && outcome_[emitted_] != Outcome::pending; ++emitted_)
+      if (outcome_[emitted_] == Outcome::failed) print_error(error_[emitted_]);
+    draw_line();
+  }
+
+  // A failure that belongs to no single input (the pack file).
+  void extra_error(const std::string& line) {
+    std::lock_guard lock(mu_);
+    clear_line();
+    ++extra_failures_;
+    print_error(line);
+    draw_line();
+  }
+
+  bool finished(size_t i) {
+    std::lock_guard lock(mu_);
+    return outcome_[i] != Outcome::pending;
+  }
+
+  BakeSummary summary() {
+    std::lock_guard lock(mu_);
+    BakeSummary s;
+    for (Outcome o : outcome_) {
+      s.baked += o == Outcome::baked;
+      s.up_to_date += o == Outcome::up_to_date;
+      s.failed += o == Outcome::failed;
+    }
+    s.failed += extra_failures_;
+    s.triangles = triangles_;
+    s.errors = lines_;
+    if (progress_) {
+      clear_line();
+      const double secs = std::chrono::duration<double>(Clock::now() - start_).count();
+      std::fprintf(err_, "octbake: %d baked, %d up to date, %d failed in %.2f s (%s tri/s)\n", s.baked,
+                   s.up_to_date, s.failed, secs, human_rate(secs > 0 ? triangles_ / secs : 0).c_str());
+    }
+    return s;
+  }
+
+ private:
+  void print_error(const std::string& line) {
+    lines_.push_back(line);
+    std::fprintf(err_, "%s\n", line.c_str());
+    std::fflush(err_);
+  }
+  void clear_line() {
+    if (progress_) std::fputs("\r\033[K", err_);
+  }
+  void draw_line() {
+    if (!progress_) return;
+    const double secs = std::chrono::duration<double>(Clock::now() - start_).count();
+    std::fprintf(err_, "baking %zu/%zu files, %s tri/s", done_, outcome_.size(),
+                 human_rate(secs > 0 ? triangles_ / secs : 0).c_str());
+    std::fflush(err_);
+  }
+
+  std::mutex mu_;
+  std::vector<Outcome> outcome_;
+  std::vector<std::string> error_;
+  std::vector<std::string> lines_;
+  std::FILE* err_;
+  bool progress_;
+  Clock::time_point start_;
+  size_t done_ = 0, emitted_ = 0;
+  int extra_failures_ = 0;
+  uint64_t triangles_ = 0;
+};
+
+std::string error_line(const std::string& path, const std::string& reason) {
+  return "octbake: error: " + path + ": " + reason;
+}
+
+// Runs fn(i) for every i in [0, n) on up to `jobs` threads. Which thread runs
+// which item never shows in the output: results are keyed by index.
+template <class Fn>
+void parallel_for(size_t n, int jobs, const Fn& fn) {
+  std::atomic<size_t> next{0};
+  auto worker = [&] {
+    for (size_t i; (i = next.fetch_add(1)) < n;) fn(i);
+  };
+  const size_t threads = std::min(n, static_cast<size_t>(std::max(jobs, 1)));
+  std::vector<std::jthread> pool;
+  for (size_t t = 1; t < threads; ++t) pool.emplace_back(worker);
+  worker();
+}
+
+// The masks of every tree of `path` when it holds exactly `expect` (names and
+// source hashes, in order) baked with `options` by this baker and format, and
+// all of its levels decode; nullopt otherwise (missing, stale or corrupt).
+std::optional<std::vector<OctreeMasks>> load_if_current(const std::string& path,
+                                                        const std::vector<const Input*>& expect,
+                                                        const BakeOptions& options) {
+  auto file = BakedFile::open(path);
+  if (!file || file->format_version() != kFormatVersion || file->baker_version() != OCTBAKE_VERSION ||
+      file->trees().size() != expect.size())
+    return std::nullopt;
+  std::vector<OctreeMasks> masks;
+  for (size_t i = 0; i < expect.size(); ++i) {
+    const TreeInfo& t = file->trees()[i];
+    if (t.name != expect[i]->name || t.source_hash != expect[i]->hash || !(t.options == options) ||
+        t.depth != options.depth)
+      return std::nullopt;
+    auto tree = file->load(i, options.depth);
+    if (!tree) return std::nullopt;
+    masks.push_back(tree->masks());
+  }
+  return masks;
+}
+
+// Imports and builds one input's tree; the error is the reason only.
+Result<TreeToEncode> bake_tree(const Input& in, const BakeOptions& options) {
+  auto mesh = import_mesh(in.path);
+  if (!mesh) return Error{mesh.error().code, error_reason(mesh.error(), in.path)};
+  TreeToEncode t;
+  t.name = in.name;
+  t.source_hash = in.hash;
+  t.options = options;
+  t.triangle_count = mesh->triangles.size();
+  t.vertex_count = mesh->positions.size();
+  t.masks = build_tree(*mesh, options.depth, options.occupancy);
+  return t;
+}
+
+std::optional<std::string> make_dir(const std::string& dir) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) return "cannot create folder " + dir + ": " + ec.message();
+  remove_stale_temps(dir);
+  return std::nullopt;
+}
+
+class Baker {
+ public:
+  Baker(const BakeConfig& config, std::FILE* err) : config_(config), err_(err) {}
+
+  BakeSummary run() {
+    collect_inputs();
+    Reporter reporter(inputs_.size(), err_, config_.progress);
+    reporter_ = &reporter;
+    find_collisions();
+    prepare_dirs();
+    if (config_.pack.empty())
+      parallel_for(inputs_.size(), config_.jobs, [&](size_t i) { guarded(i, [&] { bake_one(i); }); });
+    else
+      bake_pack();
+    return reporter.summary();
+  }
+
+ private:
+  // The same file named twice is baked once, at its first position.
+  void collect_inputs() {
+    std::vector<std::string> seen;
+    for (const std::string& path : config_.inputs) {
+      std::error_code ec;
+      fs::path key = fs::weakly_canonical(path, ec);
+      const std::string k = ec ? path : key.string();
+      if (std::find(seen.begin(), seen.end(), k) != seen.end()) continue;
+      seen.push_back(k);
+      Input in;
+      in.path = path;
+      in.name = fs::path(path).stem().string();
+      in.output = (fs::path(config_.out_dir) / (in.name + ".oct")).string();
+      inputs_.push_back(std::move(in));
+    }
+  }
+
+  // Two inputs that would write the same output (or tree name) both fail.
+  void find_collisions() {
+    const bool pack = !config_.pack.empty();
+    std::map<std::string, std::vector<size_t>> by_key;
+    for (size_t i = 0; i < inputs_.size(); ++i) {
+      if (inputs_[i].name.empty()) {
+        fail(i, "no file name to name the output after");
+        continue;
+      }
+      by_key[pack ? inputs_[i].name : inputs_[i].output].push_back(i);
+    }
+    for (const auto& [key, group] : by_key) {
+      if (group.size() < 2) continue;
+      for (size_t i : group) {
+        std::string others;
+        for (size_t j : group)
+          if (j != i) others += (others.empty() ? "" : ", ") + inputs_[j].path;
+        fail(i, pack ? "tree name \"" + key + "\" in pack " + config_.pack + " would also come from " + others
+                     : "output " + key + " would also be written by " + others);
+      }
+    }
+  }
+
+  void prepare_dirs() {
+    std::vector<std::string> dirs;
+    if (config_.pack.empty())
+      dirs.push_back(config_.out_dir);
+    else if (fs::path(config_.pack).has_parent_path())
+      dirs.push_back(fs::path(config_.pack).parent_path().string());
+    if (!config_.export_obj_dir.empty()) dirs.push_back(config_.export_obj_dir);
+    for (const std::string& dir : dirs)
+      if (auto problem = make_dir(dir))
+        for (size_t i = 0; i < inputs_.size(); ++i)
+          if (!reporter_->finished(i)) fail(i, *problem);
+  }
+
+  void fail(size_t i, const std::string& reason) {
+    reporter_->finish(i, Outcome::failed, error_line(inputs_[i].path, reason));
+  }
+
+  // No exception (bad_alloc from a huge depth, say) escapes a worker thread.
+  template <class Fn>
+  void guarded(size_t i, const Fn& fn) {
+    if (reporter_->finished(i)) return;
+    try {
+      fn();
+    } catch (const std::exception& e) {
+      fail(i, std::string("internal error: ") + e.what());
+    }
+  }
+
+  bool hash_input(size_t i) {
+    auto hash = hash_file(inputs_[i].path);
+    if (!hash) {
+      fail(i, error_reason(hash.error(), inputs_[i].path));
+      return false;
+    }
+    inputs_[i].hash = std::move(*hash);
+    return true;
+  }
+
+  // Writes the OBJ export of one tree; the error is a full reason or empty.
+  std::string export_tree(const OctreeMasks& masks, const std::string& name) {
+    if (config_.export_obj_dir.empty()) return {};
+    auto r = export_obj(masks, name, config_.export_obj_dir);
+    return r ? std::string() : "cannot export OBJ to " + config_.export_obj_dir + ": " + r.error().message;
+  }
+
+  void bake_one(size_t i) {
+    Input& in = inputs_[i];
+    if (!hash_input(i)) return;
+    if (!config_.force) {
+      if (auto masks = load_if_current(in.output, {&in}, config_.options)) {
+        const std::string problem = export_tree(masks->front(), in.name);
+        if (!problem.empty()) return fail(i, problem);
+        return reporter_->finish(i, Outcome::up_to_date);
+      }
+    }
+    auto tree = bake_tree(in, config_.options);
+    if (!tree) return fail(i, tree.error().message);
+    const std::vector<uint8_t> bytes = encode_file({&*tree, 1}, OCTBAKE_VERSION);
+    auto written = write_file_atomic(in.output, bytes);
+    if (!written) return fail(i, "cannot write " + in.output + ": " + written.error().message);
+    const std::string problem = export_tree(tree->masks, in.name);
+    if (!problem.empty()) return fail(i, problem);
+    reporter_->finish(i, Outcome::baked, {}, tree->triangle_count);
+  }
+
+  // Pack: hash everything, skip when the pack already holds exactly these
+  // trees, else bake in parallel and encode once, in input order.
+  void bake_pack() {
+    std::vector<uint8_t> hashed(inputs_.size(), 0);
+    parallel_for(inputs_.size(), config_.jobs, [&](size_t i) { guarded(i, [&] { hashed[i] = hash_input(i); }); });
+    std::vector<const Input*> expect;
+    for (size_t i = 0; i < inputs_.size(); ++i)
+      if (hashed[i]) expect.push_back(&inputs_[i]);
+    if (expect.empty()) return;
+
+    if (!config_.force) {
+      if (auto masks = load_if_current(config_.pack, expect, config_.options)) {
+        for (size_t k = 0, i = 0; i < inputs_.size(); ++i) {
+          if (!hashed[i]) continue;
+          const std::string problem = export_tree((*masks)[k++], inputs_[i].name);
+          if (problem.empty())
+            reporter_->finish(i, Outcome::up_to_date);
+          else
+            fail(i, problem);
+        }
+        return;
+      }
+    }
+
+    parallel_for(inputs_.size(), config_.jobs, [&](size_t i) {
+      guarded(i, [&] {
+        auto tree = bake_tree(inputs_[i], config_.options);
+        if (!tree) return fail(i, tree.error().message);
+        const std::string problem = export_tree(tree->masks, inputs_[i].name);
+        if (!problem.empty()) return fail(i, problem);
+        const uint64_t triangles = tree->triangle_count;
+        inputs_[i].tree = std::move(*tree);
+        reporter_->finish(i, Outcome::baked, {}, triangles);
+      });
+    });
+
+    std::vector<TreeToEncode> trees;
+    for (Input& in : inputs_)
+      if (in.tree) trees.push_back(std::move(*in.tree));
+    if (trees.empty()) return;  // keep the old pack: nothing to put in it
+    const std::vector<uint8_t> bytes = encode_file(trees, OCTBAKE_VERSION);
+    auto written = write_file_atomic(config_.pack, bytes);
+    if (!written) reporter_->extra_error(error_line(config_.pack, "cannot write: " + written.error().message));
+  }
+
+  const BakeConfig& config_;
+  std::FILE* err_;
+  std::vector<Input> inputs_;
+  Reporter* reporter_ = nullptr;
+};
+
+void append_number(std::string& s, double v) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  s.append(buf, r.ptr);
+}
+
+}  // namespace
+
+BakeSummary run_bake(const BakeConfig& config, std::FILE* err) { return Baker(config, err).run(); }
+
+std::string obj_text(const OctreeMasks& masks, const std::string& name, int depth) {
+  // Corner k of a box: x = bit 0, y = bit 1, z = bit 2 (the octant order).
+  // Quads wind counter-clockwise seen from outside.
+  static constexpr int kQuads[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
+                                       {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
+  const std::vector<BoxCoord> boxes = masks.boxes(depth);
+  std::string s = "# octbake boxes: tree " + name + ", depth " + std::to_string(depth) + ", " +
+                  std::to_string(boxes.size()) + " boxes\n";
+  s.reserve(boxes.size() * 400);
+  uint64_t base = 1;
+  for (const BoxCoord& c : boxes) {
+    const Aabb b = masks.box_bounds(depth, c);
+    for (int k = 0; k < 8; ++k) {
+      s += 'v';
+      for (int axis = 0; axis < 3; ++axis) {
+        s += ' ';
+        append_number(s, (k >> axis) & 1 ? b.max[axis] : b.min[axis]);
+      }
+      s += '\n';
+    }
+    for (const auto& quad : kQuads) {
+      s += 'f';
+      for (int corner : quad) s += ' ' + std::to_string(base + corner);
+      s += '\n';
+    }
+    base += 8;
+  }
+  return s;
+}
+
+Result<uint64_t> export_obj(const OctreeMasks& masks, const std::string& name, const std::string& dir) {
+  uint64_t total = 0;
+  for (int d = 0; d <= masks.depth(); ++d) {
+    const std::string text = obj_text(masks, name, d);
+    const std::string path = (fs::path(dir) / (name + "_d" + std::to_string(d) + ".obj")).string();
+    auto written =
+        write_file_atomic(path, {reinterpret_cast<const uint8_t*>(text.data()), text.size()});
+    if (!written) return Error{written.error().code, path + ": " + written.error().message};
+    total += *written;
+  }
+  return total;
+}
+
+}  // namespace octbake
