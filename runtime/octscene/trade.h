@@ -2,7 +2,57 @@
 // setting against an exact mesh-mesh answer. Parses its own arguments
 // (argv[0] == "trade"); returns the exit status.
 #pragma once
+#include <cstdint>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "octbake/baked_file.h"
+#include "octbake/lod.h"
+#include "octbake/result.h"
+#include "scene.h"
 
 namespace octbake::scene {
+
 int trade_main(int argc, char** argv);
-}
+
+// The same measurement as a library call (tests use it).
+struct TradeOptions {
+  std::string meshes = "assets";  // folder of source meshes
+  int64_t frames = -1;            // < 0: the scene's
+  int max_depth = 0;              // 0: deepest baked depth of the scene's trees
+};
+
+// One LOD setting's score over all frames.
+struct TradeRow {
+  std::string label;  // "fixed 3", "thesis 1-5", "screen 2px"
+  LodSettings lod;
+  uint64_t true_positives = 0, false_positives = 0, false_negatives = 0;
+  std::map<std::pair<int, int>, uint64_t> false_positives_by_depth;  // (lo, hi)
+  double box_tests_per_frame = 0;
+  double ms_per_frame = 0;  // World::step() alone
+  double precision() const;  // 1 when nothing was reported
+  double recall() const;     // 1 when nothing was to be found
+};
+
+// A reported pair the exact test finds but a setting missed: always a bug.
+struct Miss {
+  std::string setting;
+  int64_t frame = 0;
+  uint32_t a = 0, b = 0;  // object indices
+  int depth_a = 0, depth_b = 0;
+};
+
+struct TradeReport {
+  int64_t frames = 0;
+  uint64_t exact_contacts = 0;  // pairs in contact, summed over frames
+  uint64_t exact_tests = 0;     // pairs whose world boxes overlapped (tested exactly)
+  std::vector<TradeRow> rows;
+  std::vector<Miss> misses;     // first few false negatives, for the report
+  std::vector<std::string> warnings;  // e.g. mesh hash differs from the baked one
+};
+
+Result<TradeReport> run_trade(const Scene& scene, ModelLibrary& library, const TradeOptions& options);
+
+}  // namespace octbake::scene

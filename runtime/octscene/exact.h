@@ -1,0 +1,55 @@
+// The exact mesh-mesh answer that `octscene trade` and the FCL benchmark score
+// octbake against: FCL's OBBRSS BVH test on the source triangles.
+//
+// "Exact" means the two surfaces intersect (or touch, to FCL's rounding). A
+// mesh wholly inside another without touching its surface is not a contact,
+// which matches surface occupancy.
+#pragma once
+#include <fcl/geometry/bvh/BVH_model.h>
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "import.h"
+#include "octbake/pose.h"
+#include "octbake/result.h"
+
+namespace octbake::scene {
+
+using Bvh = fcl::BVHModel<fcl::OBBRSSd>;
+
+// The mesh for model `model` in `dir`: the first of DIR/model.obj, .ply, .stl,
+// .off, .gltf, .glb, .dae, .fbx that exists, or "" when none does.
+std::string find_mesh(const std::string& dir, const std::string& model);
+
+// A BVH over `mesh` with every vertex scaled by `scale` (FCL transforms are
+// rigid, so a scaled instance needs its own BVH).
+std::shared_ptr<Bvh> build_bvh(const Mesh& mesh, double scale);
+
+// fcl::Transform3d for the rigid part of `pose` (the scale lives in the BVH).
+fcl::Transform3d to_fcl(const Pose& pose);
+
+// Do two placed BVHs intersect? (FCL collide, one contact, no contact data.)
+bool bvh_collide(const Bvh& a, const Pose& pose_a, const Bvh& b, const Pose& pose_b);
+
+// Meshes by model id, BVHs built once per distinct (model, scale).
+class ExactMeshes {
+ public:
+  // Returns the new model's id (0, 1, ...).
+  int add(Mesh mesh);
+  const Mesh& mesh(int model) const { return meshes_[model]; }
+  // The BVH of `model` at `scale`, built on first use.
+  const Bvh& bvh(int model, double scale);
+  bool collide(int model_a, const Pose& a, int model_b, const Pose& b);
+  size_t bvh_count() const { return bvhs_.size(); }
+
+ private:
+  std::vector<Mesh> meshes_;
+  std::map<std::pair<int, double>, std::shared_ptr<Bvh>> bvhs_;
+};
+
+}  // namespace octbake::scene
