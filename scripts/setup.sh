@@ -9,6 +9,7 @@ packages=(
   libgtest-dev libbenchmark-dev            # tests, benchmarks
   libfcl-dev liboctomap-dev                # exact oracle + peer benchmark
   nlohmann-json3-dev libcli11-dev libstb-dev  # scene JSON, CLIs, PNG output
+  libxxhash-dev                            # source-file hash (header-only use)
   python3
 )
 missing=()
