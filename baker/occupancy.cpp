@@ -4,6 +4,7 @@
 // forms so that zero axes (degenerate triangles) are simply skipped.
 #include "occupancy.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 
 namespace octbake {
