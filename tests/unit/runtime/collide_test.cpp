@@ -1,0 +1,234 @@
+// collide / collide_all on hand-built trees: hand-checkable contacts, counts,
+// symmetry, and the leaf pairs against a brute-force oriented-box test.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <tuple>
+
+#include "octbake/collide.h"
+
+namespace octbake {
+namespace {
+
+double uniform01(std::mt19937& rng) {  // 53 random bits, same on every library
+  const uint64_t hi = rng() >> 5, lo = rng() >> 6;
+  return double((hi << 26) | lo) * 0x1p-53;
+}
+
+Eigen::Quaterniond random_rotation(std::mt19937& rng) {  // Shoemake, uniform on SO(3)
+  const double u1 = uniform01(rng), u2 = 2 * std::numbers::pi * uniform01(rng),
+               u3 = 2 * std::numbers::pi * uniform01(rng);
+  return Eigen::Quaterniond(std::sqrt(u1) * std::cos(u3), std::sqrt(1 - u1) * std::sin(u2),
+                            std::sqrt(1 - u1) * std::cos(u2), std::sqrt(u1) * std::sin(u3));
+}
+
+ObjectTree make_tree(const Aabb& bounds, std::vector<std::vector<uint8_t>> masks) {
+  OctreeMasks m{bounds, std::move(masks)};
+  TreeInfo info;
+  info.bounds = bounds;
+  info.depth = m.depth();
+  return ObjectTree(std::move(info), std::move(m));
+}
+
+// Every box occupied down to `depth`.
+ObjectTree full_tree(const Aabb& bounds, int depth) {
+  std::vector<std::vector<uint8_t>> masks;
+  for (int d = 0; d < depth; ++d) masks.emplace_back(size_t(1) << (3 * d), uint8_t{0xFF});
+  return make_tree(bounds, std::move(masks));
+}
+
+// Each child present with probability 3/4 (a box may end up with none).
+ObjectTree random_tree(std::mt19937& rng, int depth) {
+  std::vector<std::vector<uint8_t>> masks;
+  uint64_t boxes = 1;
+  for (int d = 0; d < depth; ++d) {
+    std::vector<uint8_t> level(boxes);
+    boxes = 0;
+    for (auto& m : level) {
+      m = uint8_t((rng() | rng()) & 0xFF);
+      boxes += std::popcount(m);
+    }
+    masks.push_back(std::move(level));
+  }
+  const Eigen::Vector3d size(0.5 + uniform01(rng), 0.5 + uniform01(rng), 0.5 + uniform01(rng));
+  const Eigen::Vector3d lo = -0.5 * size + 0.2 * Eigen::Vector3d(uniform01(rng), uniform01(rng), uniform01(rng));
+  return make_tree({lo, lo + size}, std::move(masks));
+}
+
+const Aabb kUnit{{0, 0, 0}, {1, 1, 1}};
+const Aabb kCentred{{-1, -1, -1}, {1, 1, 1}};
+
+Pose at(Eigen::Vector3d p, Eigen::Quaterniond q = Eigen::Quaterniond::Identity(), double s = 1) {
+  Pose pose;
+  pose.position = p;
+  pose.rotation = q;
+  pose.scale = s;
+  return pose;
+}
+
+// Independent reference: 15-axis separating test on world-space corners.
+bool boxes_overlap(const OrientedBox& a, const OrientedBox& b) {
+  auto corners = [](const OrientedBox& o) {
+    std::array<Eigen::Vector3d, 8> c;
+    for (int k = 0; k < 8; ++k)
+      c[k] = o.center + o.axes * Eigen::Vector3d((k & 1 ? 1 : -1) * o.half[0], (k & 2 ? 1 : -1) * o.half[1],
+                                                 (k & 4 ? 1 : -1) * o.half[2]);
+    return c;
+  };
+  const auto ca = corners(a), cb = corners(b);
+  std::vector<Eigen::Vector3d> axes;
+  for (int i = 0; i < 3; ++i) {
+    axes.push_back(a.axes.col(i));
+    axes.push_back(b.axes.col(i));
+    for (int j = 0; j < 3; ++j) axes.push_back(a.axes.col(i).cross(b.axes.col(j)));
+  }
+  for (const auto& axis : axes) {
+    if (axis.norm() < 1e-12) continue;
+    double amin = INFINITY, amax = -INFINITY, bmin = INFINITY, bmax = -INFINITY;
+    for (const auto& p : ca) amin = std::min(amin, p.dot(axis)), amax = std::max(amax, p.dot(axis));
+    for (const auto& p : cb) bmin = std::min(bmin, p.dot(axis)), bmax = std::max(bmax, p.dot(axis));
+    if (amax < bmin || bmax < amin) return false;
+  }
+  return true;
+}
+
+auto key(const LeafPair& p) { return std::tuple(p.a.x, p.a.y, p.a.z, p.b.x, p.b.y, p.b.z); }
+
+TEST(Collide, RootsOnlyCountOneTest) {
+  const ObjectTree t = full_tree(kUnit, 3);
+  const PairTest hit = collide({&t, at({0.5, 0, 0}), 0}, {&t, at({0, 0, 0}), 0});
+  EXPECT_TRUE(hit.hit);
+  EXPECT_EQ(hit.box_tests, 1u);
+  const PairTest miss = collide({&t, at({2, 0, 0}), 3}, {&t, at({0, 0, 0}), 3});
+  EXPECT_FALSE(miss.hit);
+  EXPECT_EQ(miss.box_tests, 1u);
+}
+
+TEST(Collide, FirstLeafPairEndsTheDescent) {
+  // Identical full trees at the same pose: the first pair of every 64 overlaps.
+  const ObjectTree t = full_tree(kUnit, 3);
+  const PairTest r = collide({&t, at({0, 0, 0}), 3}, {&t, at({0, 0, 0}), 3});
+  EXPECT_TRUE(r.hit);
+  EXPECT_EQ(r.box_tests, 4u);  // root, then one pair per depth
+  const PairTest one_side = collide({&t, at({0, 0, 0}), 0}, {&t, at({0, 0, 0}), 2});
+  EXPECT_TRUE(one_side.hit);
+  EXPECT_EQ(one_side.box_tests, 3u);
+}
+
+TEST(Collide, AxisAlignedFacesTouchAtEveryDepth) {
+  const ObjectTree t = full_tree(kUnit, 4);
+  for (const double offset : {0.0, 1e7}) {
+    const Eigen::Vector3d base(offset, -offset, offset);
+    for (int da = 0; da <= 4; ++da)
+      for (int db = 0; db <= 4; ++db) {
+        const PlacedTree a{&t, at(base), da};
+        EXPECT_TRUE(collide(a, {&t, at(base + Eigen::Vector3d(1, 0, 0)), db}).hit) << da << " " << db;
+        EXPECT_TRUE(collide(a, {&t, at(base + Eigen::Vector3d(1, 1, 1)), db}).hit);  // corners meet
+        EXPECT_FALSE(collide(a, {&t, at(base + Eigen::Vector3d(1 + 1e-6, 0, 0)), db}).hit);
+        EXPECT_FALSE(collide(a, {&t, at(base + Eigen::Vector3d(0, -1 - 1e-6, 0.5)), db}).hit);
+      }
+  }
+}
+
+TEST(Collide, SparseTreesTouchOnlyWhereBoxesAre) {
+  // A holds only its lowest corner octant; B only its highest.
+  const ObjectTree a = make_tree(kUnit, {{0x01}});
+  const ObjectTree b = make_tree(kUnit, {{0x80}});
+  // B moved by (-0.5,-0.5,-0.5): its kept octant sits exactly on A's kept one.
+  EXPECT_TRUE(collide({&a, at({0, 0, 0}), 1}, {&b, at({-0.5, -0.5, -0.5}), 1}).hit);
+  // B moved by (0.5, 0, 0): the roots overlap, the kept octants are 0.5 apart.
+  const PairTest r = collide({&a, at({0, 0, 0}), 1}, {&b, at({0.5, 0, 0}), 1});
+  EXPECT_FALSE(r.hit);
+  EXPECT_EQ(r.box_tests, 2u);
+  EXPECT_TRUE(collide({&a, at({0, 0, 0}), 0}, {&b, at({0.5, 0, 0}), 1}).hit);
+}
+
+TEST(Collide, Rotated45Degrees) {
+  const ObjectTree t = full_tree(kCentred, 3);
+  const Eigen::Quaterniond q(Eigen::AngleAxisd(std::numbers::pi / 4, Eigen::Vector3d::UnitZ()));
+  const double reach = 1 + std::sqrt(2.0);  // B's corner touches A's +x face
+  for (int d = 0; d <= 3; ++d) {
+    EXPECT_TRUE(collide({&t, at({0, 0, 0}), d}, {&t, at({reach - 1e-6, 0, 0}, q), d}).hit);
+    EXPECT_FALSE(collide({&t, at({0, 0, 0}), d}, {&t, at({reach + 1e-6, 0, 0}, q), d}).hit);
+    // Both rotated by the same 45 degrees about z: faces meet along the diagonal.
+    const Eigen::Vector3d diag = q * Eigen::Vector3d(2, 0, 0);
+    EXPECT_TRUE(collide({&t, at({0, 0, 0}, q), d}, {&t, at(diag, q), d}).hit);
+    EXPECT_FALSE(collide({&t, at({0, 0, 0}, q), d}, {&t, at(diag * (1 + 1e-6), q), d}).hit);
+    // Edge against edge: B rotated 45 degrees about x, sitting above A's top.
+    const Eigen::Quaterniond qx(Eigen::AngleAxisd(std::numbers::pi / 4, Eigen::Vector3d::UnitX()));
+    EXPECT_TRUE(collide({&t, at({0, 0, 0}), d}, {&t, at({0, reach - 1e-6, 0}, qx), d}).hit);
+    EXPECT_FALSE(collide({&t, at({0, 0, 0}), d}, {&t, at({0, reach + 1e-6, 0}, qx), d}).hit);
+  }
+}
+
+TEST(Collide, FlatTreeRestingOnABox) {
+  const ObjectTree cube = full_tree(kUnit, 3);
+  const ObjectTree quad = full_tree({{0, 0, 0}, {1, 1, 0}}, 3);  // zero thickness in z
+  for (int d = 0; d <= 3; ++d) {
+    EXPECT_TRUE(collide({&cube, at({0, 0, 0}), d}, {&quad, at({0.5, 0.5, 1}), d}).hit);
+    EXPECT_FALSE(collide({&cube, at({0, 0, 0}), d}, {&quad, at({0.5, 0.5, 1 + 1e-6}), d}).hit);
+    EXPECT_TRUE(collide({&quad, at({0, 0, 0}), d}, {&quad, at({0.5, 0.5, 0}), d}).hit);  // coplanar
+  }
+}
+
+TEST(Collide, ScaleIsRelative) {
+  const ObjectTree t = full_tree(kUnit, 2);
+  for (const double s : {1e-4, 1.0, 1e4}) {
+    EXPECT_TRUE(collide({&t, at({0, 0, 0}, {1, 0, 0, 0}, s), 2}, {&t, at({s, 0, 0}, {1, 0, 0, 0}, 2 * s), 2}).hit);
+    EXPECT_FALSE(
+        collide({&t, at({0, 0, 0}, {1, 0, 0, 0}, s), 2}, {&t, at({s * (1 + 1e-6), 0, 0}, {1, 0, 0, 0}, 2 * s), 2}).hit);
+  }
+}
+
+// Random trees and poses: collide_all finds exactly the overlapping leaf pairs
+// of a brute-force test, collide agrees, and both orders give the same answer.
+TEST(Collide, AllLeafPairsMatchBruteForce) {
+  std::mt19937 rng(7);
+  int hits = 0, runs = 0;
+  for (int run = 0; run < 300; ++run) {
+    const int depth_a = int(rng() % 4), depth_b = int(rng() % 4);
+    const ObjectTree ta = random_tree(rng, depth_a), tb = random_tree(rng, depth_b);
+    const double spread = 1.6;
+    auto random_pose = [&] {
+      return at({spread * (uniform01(rng) - 0.5), spread * (uniform01(rng) - 0.5), spread * (uniform01(rng) - 0.5)},
+                random_rotation(rng), 0.5 + uniform01(rng));
+    };
+    const PlacedTree a{&ta, random_pose(), depth_a}, b{&tb, random_pose(), depth_b};
+
+    std::vector<LeafPair> expected;
+    for (const BoxCoord& ca : ta.masks().boxes(depth_a))
+      for (const BoxCoord& cb : tb.masks().boxes(depth_b))
+        if (boxes_overlap(place(ta.masks().box_bounds(depth_a, ca), a.pose),
+                          place(tb.masks().box_bounds(depth_b, cb), b.pose)))
+          expected.push_back({ca, cb});
+
+    std::vector<LeafPair> found, found_ba;
+    const PairTest all = collide_all(a, b, found);
+    const PairTest all_ba = collide_all(b, a, found_ba);
+    auto by_key = [](const LeafPair& x, const LeafPair& y) { return key(x) < key(y); };
+    std::sort(expected.begin(), expected.end(), by_key);
+    std::sort(found.begin(), found.end(), by_key);
+    ASSERT_EQ(found.size(), expected.size()) << "run " << run;
+    for (size_t i = 0; i < found.size(); ++i) ASSERT_EQ(key(found[i]), key(expected[i])) << "run " << run;
+    ASSERT_EQ(found_ba.size(), found.size());
+    EXPECT_EQ(all.hit, !expected.empty());
+    EXPECT_EQ(all.box_tests, all_ba.box_tests);
+
+    const PairTest ab = collide(a, b), ba = collide(b, a);
+    EXPECT_EQ(ab.hit, !expected.empty()) << "run " << run;
+    EXPECT_EQ(ab.hit, ba.hit);
+    EXPECT_EQ(ab.box_tests, ba.box_tests);
+    EXPECT_LE(ab.box_tests, all.box_tests);
+    hits += ab.hit;
+    ++runs;
+  }
+  // Not vacuous: both outcomes are common.
+  EXPECT_GT(hits, runs * 3 / 10);
+  EXPECT_LT(hits, runs * 7 / 10);
+}
+
+}  // namespace
+}  // namespace octbake
