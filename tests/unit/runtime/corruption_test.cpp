@@ -82,8 +82,8 @@ TEST(Corruption, RandomByteFlipsFailCleanlyOrStillNest) {
   std::mt19937 rng(2024);
   std::vector<TreeToEncode> trees;
   trees.push_back(test::random_tree(rng, "a", 5, Compression::zstd));
-  trees.push_back(test::random_tree(rng, "b", 4, Compression::none));
-  trees.back().masks = full_masks(4);  // a raw level big enough to be hit often
+  trees.push_back(test::random_tree(rng, "b", 3, Compression::none));
+  trees.back().masks = full_masks(3);  // a raw level big enough to be hit often
   trees.back().options.compression = Compression::none;
   const std::vector<uint8_t> clean = encode_file(trees, "v");
   int loaded = 0, refused = 0;
