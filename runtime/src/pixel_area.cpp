@@ -53,8 +53,9 @@ double hull_area(Vec2* pts, int n) {
     while (k >= lower && cross(hull[k - 2], hull[k - 1], pts[i]) <= 0) --k;
     hull[k++] = pts[i];
   }
+  // Shoelace relative to the first vertex: tiny far-away hulls keep their digits.
   double twice = 0;
-  for (int i = 0; i + 1 < k; ++i) twice += hull[i].x() * hull[i + 1].y() - hull[i + 1].x() * hull[i].y();
+  for (int i = 1; i + 2 < k; ++i) twice += cross(hull[0], hull[i], hull[i + 1]);
   return 0.5 * std::abs(twice);
 }
 
@@ -118,8 +119,10 @@ double pixel_area(const Camera& camera, const OrientedBox& box) {
     for (const auto& plane : planes) poly = clip(poly, plane);
     for (int i = 0; i < poly.n; ++i) {
       const Vec3& p = poly.v[i];
-      const double x = std::clamp((p.x() / (p.z() * tx) + 1) * 0.5 * w, 0.0, w);
-      const double y = std::clamp((p.y() / (p.z() * ty) + 1) * 0.5 * h, 0.0, h);
+      // Pixels from the viewport centre (no +1 offset, which would round away
+      // the size of a distant box).
+      const double x = std::clamp(p.x() / (p.z() * tx) * 0.5 * w, -0.5 * w, 0.5 * w);
+      const double y = std::clamp(p.y() / (p.z() * ty) * 0.5 * h, -0.5 * h, 0.5 * h);
       pts[n++] = Vec2(x, y);
     }
   }

@@ -1,0 +1,203 @@
+// pixel_area against a brute-force count of covered pixel centres, plus
+// analytic face-on cases and extreme cameras.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "octbake/lod.h"
+
+namespace octbake {
+namespace {
+
+double uniform01(std::mt19937& rng) {  // 53 random bits, same on every library
+  const uint64_t hi = rng() >> 5, lo = rng() >> 6;
+  return double((hi << 26) | lo) * 0x1p-53;
+}
+
+Eigen::Quaterniond random_rotation(std::mt19937& rng) {  // Shoemake, uniform on SO(3)
+  const double u1 = uniform01(rng), u2 = 2 * std::numbers::pi * uniform01(rng),
+               u3 = 2 * std::numbers::pi * uniform01(rng);
+  return Eigen::Quaterniond(std::sqrt(u1) * std::cos(u3), std::sqrt(1 - u1) * std::sin(u2),
+                            std::sqrt(1 - u1) * std::cos(u2), std::sqrt(u1) * std::sin(u3));
+}
+
+Eigen::Vector3d random_vector(std::mt19937& rng, double r) {
+  return {r * (2 * uniform01(rng) - 1), r * (2 * uniform01(rng) - 1), r * (2 * uniform01(rng) - 1)};
+}
+
+OrientedBox make_box(Eigen::Vector3d center, Eigen::Vector3d half,
+                     Eigen::Quaterniond q = Eigen::Quaterniond::Identity()) {
+  OrientedBox box;
+  box.center = center;
+  box.axes = q.toRotationMatrix();
+  box.half = half;
+  return box;
+}
+
+// Does the ray cam + t * dir, t >= t_min, meet the box? (slabs in box frame)
+bool ray_hits(const Eigen::Vector3d& cam, const Eigen::Vector3d& dir, double t_min, const OrientedBox& box) {
+  const Eigen::Vector3d o = box.axes.transpose() * (cam - box.center);
+  const Eigen::Vector3d d = box.axes.transpose() * dir;
+  double lo = t_min, hi = INFINITY;
+  for (int i = 0; i < 3; ++i) {
+    if (d[i] == 0) {
+      if (std::abs(o[i]) > box.half[i]) return false;
+      continue;
+    }
+    const double t1 = (-box.half[i] - o[i]) / d[i], t2 = (box.half[i] - o[i]) / d[i];
+    lo = std::max(lo, std::min(t1, t2));
+    hi = std::min(hi, std::max(t1, t2));
+  }
+  return lo <= hi;
+}
+
+struct Coverage {
+  int covered = 0;
+  int boundary = 0;  // covered pixels with an uncovered 4-neighbour, and vice versa
+};
+
+// Casts one ray per pixel centre. The ray direction has unit depth, so its
+// parameter is the distance along the view axis and t >= near is the near plane.
+Coverage brute_force(const Camera& cam, const OrientedBox& box) {
+  const Eigen::Vector3d f = (cam.look_at - cam.position).normalized();
+  const Eigen::Vector3d r = f.cross(cam.up).normalized();
+  const Eigen::Vector3d u = r.cross(f);
+  const double ty = std::tan(cam.fov_y_deg * std::numbers::pi / 360), tx = ty * cam.viewport_w / cam.viewport_h;
+  const int w = cam.viewport_w, h = cam.viewport_h;
+  std::vector<char> hit(size_t(w) * h);
+  Coverage c;
+  for (int j = 0; j < h; ++j)
+    for (int i = 0; i < w; ++i) {
+      const double x = (2 * (i + 0.5) / w - 1) * tx, y = (2 * (j + 0.5) / h - 1) * ty;
+      hit[size_t(j) * w + i] = ray_hits(cam.position, f + x * r + y * u, cam.near_plane, box);
+      c.covered += hit[size_t(j) * w + i];
+    }
+  for (int j = 0; j < h; ++j)
+    for (int i = 0; i < w; ++i) {
+      const char v = hit[size_t(j) * w + i];
+      const bool edge = (i > 0 && hit[size_t(j) * w + i - 1] != v) || (i + 1 < w && hit[size_t(j) * w + i + 1] != v) ||
+                        (j > 0 && hit[size_t(j - 1) * w + i] != v) || (j + 1 < h && hit[size_t(j + 1) * w + i] != v);
+      c.boundary += edge;
+    }
+  return c;
+}
+
+TEST(PixelArea, MatchesCoveredPixelCentres) {
+  std::mt19937 rng(2024);
+  int seen = 0, empty = 0, clipped_by_near = 0, cases = 0;
+  for (int run = 0; run < 300; ++run) {
+    Camera cam;
+    cam.position = random_vector(rng, 8);
+    cam.look_at = random_vector(rng, 2);
+    cam.up = random_vector(rng, 1);
+    cam.fov_y_deg = 30 + 80 * uniform01(rng);
+    cam.viewport_w = 64 + int(rng() % 137);
+    cam.viewport_h = 48 + int(rng() % 103);
+    cam.near_plane = run % 4 == 0 ? 2 + 4 * uniform01(rng) : 0.1;  // some boxes straddle the near plane
+    const OrientedBox box = make_box(random_vector(rng, 3),
+                                     {0.1 + 2 * uniform01(rng), 0.1 + 2 * uniform01(rng), 0.1 + 2 * uniform01(rng)},
+                                     random_rotation(rng));
+    const Eigen::Vector3d local = box.axes.transpose() * (cam.position - box.center);
+    if ((local.cwiseAbs().array() <= box.half.array()).all()) continue;  // enclosing: tested below
+    ++cases;
+    const double area = pixel_area(cam, box);
+    const Coverage c = brute_force(cam, box);
+    EXPECT_NEAR(area, c.covered, 0.01 * c.covered + c.boundary + 4)
+        << "run " << run << " boundary " << c.boundary << " viewport " << cam.viewport_w << "x" << cam.viewport_h;
+    seen += c.covered > 100;
+    empty += c.covered == 0;
+    // The near plane matters: the count without it differs.
+    Camera no_near = cam;
+    no_near.near_plane = 1e-9;
+    clipped_by_near += c.covered > 0 && brute_force(no_near, box).covered > c.covered + 50;
+  }
+  EXPECT_GT(seen, cases / 2);
+  EXPECT_GT(empty, 5);
+  EXPECT_GT(clipped_by_near, 5);
+}
+
+// A face-on box fully in view projects to a rectangle: its nearest face.
+TEST(PixelArea, FaceOnRectangleIsExact) {
+  for (const double distance : {5.0, 1e3, 1e9}) {
+    Camera cam;
+    cam.position = {0.25, -0.5, -distance};
+    cam.look_at = {0.25, -0.5, 0};
+    cam.fov_y_deg = 60;
+    cam.viewport_w = 640;
+    cam.viewport_h = 480;
+    const OrientedBox box = make_box({0, 0, 0}, {1, 0.5, 2});
+    const double ty = std::tan(std::numbers::pi / 6), tx = ty * 640 / 480;
+    const double z = distance - 2;  // nearest face
+    const double w = 2 * 1 / (z * tx) * 320, h = 2 * 0.5 / (z * ty) * 240;
+    EXPECT_NEAR(pixel_area(cam, box), w * h, 1e-9 * w * h) << distance;
+  }
+}
+
+TEST(PixelArea, EnclosingCameraIsTheWholeViewport) {
+  Camera cam;
+  cam.position = {0.1, 0.2, 0.3};
+  cam.viewport_w = 320;
+  cam.viewport_h = 200;
+  EXPECT_EQ(pixel_area(cam, make_box({0, 0, 0}, {1, 1, 1})), 320.0 * 200);
+  // Even a box smaller than the near distance.
+  EXPECT_EQ(pixel_area(cam, make_box(cam.position, {0.01, 0.01, 0.01})), 320.0 * 200);
+}
+
+TEST(PixelArea, BehindOrBesideTheCameraIsZero) {
+  Camera cam;  // at (0,0,-10) looking at the origin (+z)
+  EXPECT_EQ(pixel_area(cam, make_box({0, 0, -20}, {1, 1, 1})), 0.0);
+  EXPECT_EQ(pixel_area(cam, make_box({0, 0, -10.05}, {5, 5, 0.04})), 0.0);  // just behind, wide
+  EXPECT_EQ(pixel_area(cam, make_box({100, 0, 0}, {1, 1, 1})), 0.0);      // outside the side planes
+  // Wholly between the camera and the near plane.
+  cam.near_plane = 1;
+  EXPECT_EQ(pixel_area(cam, make_box({0, 0, -9.5}, {0.2, 0.2, 0.2})), 0.0);
+}
+
+TEST(PixelArea, ExtremeCamerasStayFiniteAndSane) {
+  const OrientedBox straddling = make_box({0, 0, -10}, {3, 3, 3});
+  const OrientedBox ahead = make_box({0, 0, 0}, {1, 1, 1});
+  const OrientedBox far_away = make_box({0, 0, 1e9}, {1, 1, 1});
+  const OrientedBox tilted = make_box({0.5, -0.3, 2}, {1, 2, 0.5},
+                                      Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized())));
+  for (const double fov : {1e-6, 1.0, 60.0, 179.999})
+    for (const auto& [w, h] : {std::pair{1, 1}, std::pair{16384, 16384}, std::pair{1920, 1080}})
+      for (const OrientedBox* box : {&straddling, &ahead, &far_away, &tilted}) {
+        Camera cam;
+        cam.fov_y_deg = fov;
+        cam.viewport_w = w;
+        cam.viewport_h = h;
+        const double area = pixel_area(cam, *box);
+        EXPECT_TRUE(std::isfinite(area));
+        EXPECT_GE(area, 0.0);
+        EXPECT_LE(area, double(w) * h);
+        if (box == &straddling) {
+          EXPECT_EQ(area, double(w) * h);  // encloses the camera
+        }
+        if (box == &ahead && fov <= 1.0) {
+          EXPECT_NEAR(area, double(w) * h, 1e-9 * w * h);  // fills a narrow view
+        }
+        if (box == &ahead && fov > 100) {
+          EXPECT_GT(area, 0.0);
+        }
+      }
+}
+
+TEST(PixelArea, UpAlongTheViewDirectionStillWorks) {
+  Camera cam;
+  cam.position = {0, 10, 0};
+  cam.look_at = {0, 0, 0};
+  cam.up = {0, 1, 0};  // parallel to the view direction
+  cam.viewport_w = cam.viewport_h = 100;
+  const OrientedBox box = make_box({0, 0, 0}, {1, 1, 1});
+  const double area = pixel_area(cam, box);
+  Camera sane = cam;
+  sane.up = {0, 0, 1};
+  // Square viewport, box centred face-on: the roll does not change the area.
+  EXPECT_NEAR(area, pixel_area(sane, box), 1e-9 * area);
+  EXPECT_GT(area, 0.0);
+}
+
+}  // namespace
+}  // namespace octbake
