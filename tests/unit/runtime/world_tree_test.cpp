@@ -1,0 +1,187 @@
+// WorldTree against a brute-force oracle: every overlapping AABB pair is a
+// candidate (no miss), and the candidate set is exactly "shares a clamped cell
+// or is in overflow", each pair once, sorted.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <utility>
+#include <vector>
+
+#include "octbake/world_tree.h"
+
+namespace octbake {
+namespace {
+
+using Pairs = std::vector<std::pair<uint32_t, uint32_t>>;
+
+// [0, 1) from 24 raw bits: the same on every standard library.
+double unit(std::mt19937& rng) { return double(rng() >> 8) * (1.0 / 16777216.0); }
+double uniform(std::mt19937& rng, double lo, double hi) { return lo + (hi - lo) * unit(rng); }
+
+Aabb random_box(std::mt19937& rng, double reach, double max_half) {
+  Eigen::Vector3d c, h;
+  for (int k = 0; k < 3; ++k) c[k] = uniform(rng, -reach, reach);
+  for (int k = 0; k < 3; ++k) h[k] = uniform(rng, 0.0, max_half);
+  return {c - h, c + h};
+}
+
+bool overlaps(const Aabb& a, const Aabb& b) {
+  return (a.min.array() <= b.max.array()).all() && (b.min.array() <= a.max.array()).all();
+}
+
+// The oracle's own idea of the grid: cell = floor((x - min) / size), clamped.
+struct GridOracle {
+  Aabb world;
+  int depth;
+  int cell(double x, int k) const {
+    const int n = 1 << depth;
+    const double size = (world.max[k] - world.min[k]) / n;
+    return std::clamp(int(std::floor((x - world.min[k]) / size)), 0, n - 1);
+  }
+  bool overflow(const Aabb& b) const {
+    if ((b.min.array() < world.min.array()).any() || (b.max.array() > world.max.array()).any()) return true;
+    uint64_t count = 1;
+    for (int k = 0; k < 3; ++k) count *= uint64_t(cell(b.max[k], k) - cell(b.min[k], k) + 1);
+    return count > WorldTree::kMaxCells;
+  }
+  bool share_cell(const Aabb& a, const Aabb& b) const {
+    for (int k = 0; k < 3; ++k)
+      if (cell(a.max[k], k) < cell(b.min[k], k) || cell(b.max[k], k) < cell(a.min[k], k)) return false;
+    return true;
+  }
+  std::array<int, 6> range(const Aabb& b) const {
+    return {cell(b.min[0], 0), cell(b.min[1], 1), cell(b.min[2], 2), cell(b.max[0], 0), cell(b.max[1], 1), cell(b.max[2], 2)};
+  }
+};
+
+// Checks `got` against the oracle over the present boxes; returns how many
+// candidates truly overlap (the caller checks the test is not vacuous).
+size_t check_pairs(const GridOracle& grid, const std::vector<Aabb>& boxes, const std::vector<bool>& present,
+                   const Pairs& got) {
+  for (size_t k = 0; k < got.size(); ++k) {
+    EXPECT_LT(got[k].first, got[k].second);
+    if (k > 0) {
+      EXPECT_LT(got[k - 1], got[k]) << "not sorted or repeated at " << k;
+    }
+  }
+  auto has = [&](uint32_t a, uint32_t b) { return std::binary_search(got.begin(), got.end(), std::pair(a, b)); };
+  std::vector<bool> overflow(boxes.size());
+  for (size_t i = 0; i < boxes.size(); ++i) overflow[i] = grid.overflow(boxes[i]);
+  size_t expected = 0, overlapping = 0;
+  for (uint32_t a = 0; a < boxes.size(); ++a) {
+    if (!present[a]) continue;
+    for (uint32_t b = a + 1; b < boxes.size(); ++b) {
+      if (!present[b]) continue;
+      const bool candidate = overflow[a] || overflow[b] || grid.share_cell(boxes[a], boxes[b]);
+      if (overlaps(boxes[a], boxes[b])) {
+        ++overlapping;
+        EXPECT_TRUE(candidate) << "the oracle itself must not miss " << a << "," << b;
+      }
+      expected += candidate;
+      if (candidate != has(a, b)) ADD_FAILURE() << (candidate ? "missed " : "spurious ") << a << "," << b;
+    }
+  }
+  EXPECT_EQ(got.size(), expected);
+  return overlapping;
+}
+
+class WorldTreeOracle : public ::testing::TestWithParam<int> {};
+
+TEST_P(WorldTreeOracle, MatchesBruteForceThroughMovesAndRemovals) {
+  const int depth = GetParam();
+  const Aabb world{{-10, -10, -10}, {10, 10, 10}};
+  const GridOracle grid{world, depth};
+  WorldTree tree(world, depth);
+  std::mt19937 rng(1234 + depth);
+
+  // Reach 11 > 10: some boxes poke out or lie wholly outside the world.
+  const uint32_t n = 400;
+  std::vector<Aabb> boxes(n);
+  std::vector<bool> present(n, true);
+  for (uint32_t i = 0; i < n; ++i) {
+    boxes[i] = random_box(rng, 11.0, i % 50 == 0 ? 6.0 : 1.2);
+    EXPECT_TRUE(tree.update(i, boxes[i])) << "a first insertion is a change";
+  }
+  EXPECT_EQ(tree.reinsertions(), 0u);
+  Pairs pairs;
+  tree.candidate_pairs(pairs);
+  const size_t overlapping = check_pairs(grid, boxes, present, pairs);
+  EXPECT_GT(overlapping, 100u) << "the scene must have overlaps for the test to mean anything";
+
+  uint64_t changes = 0;
+  for (int round = 0; round < 5; ++round) {
+    for (uint32_t i = 0; i < n; i += 3) {
+      const Eigen::Vector3d d(uniform(rng, -1.5, 1.5), uniform(rng, -1.5, 1.5), uniform(rng, -1.5, 1.5));
+      const Aabb moved{boxes[i].min + d, boxes[i].max + d};
+      const bool expect_change = grid.range(moved) != grid.range(boxes[i]) || grid.overflow(moved) != grid.overflow(boxes[i]);
+      EXPECT_EQ(tree.update(i, moved), expect_change) << "object " << i << " round " << round;
+      changes += expect_change;
+      boxes[i] = moved;
+    }
+    tree.candidate_pairs(pairs);
+    check_pairs(grid, boxes, present, pairs);
+  }
+  EXPECT_EQ(tree.reinsertions(), changes);
+  EXPECT_GT(changes, 0u);
+
+  for (uint32_t i = 1; i < n; i += 4) {
+    tree.remove(i);
+    present[i] = false;
+    EXPECT_FALSE(tree.contains(i));
+  }
+  tree.remove(1);  // twice: no-op
+  tree.candidate_pairs(pairs);
+  check_pairs(grid, boxes, present, pairs);
+
+  // Re-adding a removed object is an insertion, not a reinsertion.
+  const uint64_t before = tree.reinsertions();
+  EXPECT_TRUE(tree.update(1, boxes[1]));
+  present[1] = true;
+  EXPECT_EQ(tree.reinsertions(), before);
+  tree.candidate_pairs(pairs);
+  check_pairs(grid, boxes, present, pairs);
+}
+
+// Depth 0: one cell (everything paired); 3: coarse; 6: boxes span many cells.
+INSTANTIATE_TEST_SUITE_P(Depths, WorldTreeOracle, ::testing::Values(0, 3, 6));
+
+TEST(WorldTree, UpdateWithinSameCellsIsNotAChange) {
+  WorldTree tree({{0, 0, 0}, {8, 8, 8}}, /*depth=*/3);  // unit cells
+  ASSERT_TRUE(tree.update(7, {{2.2, 2.2, 2.2}, {2.4, 2.4, 2.4}}));
+  EXPECT_FALSE(tree.update(7, {{2.3, 2.1, 2.6}, {2.9, 2.5, 2.7}}));
+  EXPECT_EQ(tree.reinsertions(), 0u);
+  EXPECT_TRUE(tree.update(7, {{2.3, 2.1, 2.6}, {3.1, 2.5, 2.7}}));  // now also in x cell 3
+  EXPECT_EQ(tree.reinsertions(), 1u);
+  EXPECT_FALSE(tree.in_overflow(7));
+  EXPECT_TRUE(tree.update(7, {{-0.1, 2.1, 2.6}, {0.5, 2.5, 2.7}}));  // pokes out: overflow
+  EXPECT_TRUE(tree.in_overflow(7));
+  EXPECT_EQ(tree.reinsertions(), 2u);
+}
+
+TEST(WorldTree, OverflowPairsWithEverythingOnce) {
+  WorldTree tree({{0, 0, 0}, {8, 8, 8}}, /*depth=*/3);
+  tree.update(0, {{1, 1, 1}, {1.5, 1.5, 1.5}});
+  tree.update(1, {{6, 6, 6}, {6.5, 6.5, 6.5}});
+  tree.update(2, {{20, 20, 20}, {21, 21, 21}});  // wholly outside
+  tree.update(3, {{-1, 6, 6}, {6.2, 6.2, 6.2}});  // partly outside, shares cells with 1
+  Pairs pairs;
+  tree.candidate_pairs(pairs);
+  const Pairs expected{{0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+  EXPECT_EQ(pairs, expected);
+}
+
+TEST(WorldTree, HugeObjectGoesToOverflowInsteadOfThousandsOfCells) {
+  WorldTree tree({{0, 0, 0}, {64, 64, 64}}, /*depth=*/6);
+  tree.update(0, {{0, 0, 0}, {64, 1, 64}});  // a ground plane: 64*2*64 cells
+  EXPECT_TRUE(tree.in_overflow(0));
+  tree.update(1, {{30, 30, 30}, {31, 31, 31}});
+  EXPECT_FALSE(tree.in_overflow(1));
+  Pairs pairs;
+  tree.candidate_pairs(pairs);
+  EXPECT_EQ(pairs, (Pairs{{0, 1}}));
+}
+
+}  // namespace
+}  // namespace octbake
