@@ -191,9 +191,10 @@ Scene parse(const json& root, const std::string& scene_dir) {
   return s;
 }
 
-// nlohmann keeps the last of duplicate keys; a scene must not say two things.
-// Tracks the path through the parse events to name the duplicate.
-class DuplicateKeyCheck {
+// Follows the JSON path through the parse events: nlohmann keeps the last of
+// duplicate keys (a scene must not say two things), and a number overflow
+// (1e999) is thrown without saying where.
+class PathTracker {
  public:
   bool operator()(int, json::parse_event_t event, json& parsed) {
     switch (event) {
@@ -221,6 +222,12 @@ class DuplicateKeyCheck {
   }
   std::string error;
 
+  std::string path() const {
+    std::string p;
+    for (const Frame& f : stack_) p = f.is_array ? index(p, f.count) : join(p, f.key);
+    return p;
+  }
+
  private:
   struct Frame {
     bool is_array;
@@ -228,11 +235,6 @@ class DuplicateKeyCheck {
     std::string key;
     std::set<std::string> keys;
   };
-  std::string path() const {
-    std::string p;
-    for (const Frame& f : stack_) p = f.is_array ? index(p, f.count) : join(p, f.key);
-    return p;
-  }
   std::vector<Frame> stack_;
 };
 
@@ -253,11 +255,14 @@ std::string line_column(const std::string& text, size_t byte) {
 
 Result<Scene> parse_scene(const std::string& json_text, const std::string& scene_dir) {
   json root;
-  auto duplicates = std::make_shared<DuplicateKeyCheck>();
+  auto tracker = std::make_shared<PathTracker>();
   try {
-    root = json::parse(json_text, [duplicates](int depth, json::parse_event_t event, json& parsed) {
-      return (*duplicates)(depth, event, parsed);
+    root = json::parse(json_text, [tracker](int depth, json::parse_event_t event, json& parsed) {
+      return (*tracker)(depth, event, parsed);
     });
+  } catch (const json::out_of_range&) {
+    // Only thrown by the lexer for numbers beyond double (id 406).
+    return Error{ErrorCode::invalid_argument, tracker->path() + ": not a finite number"};
   } catch (const json::parse_error& e) {
     // e.what() reads "[json.exception.parse_error.101] parse error at line L, column C: REASON".
     std::string what = e.what();
@@ -266,7 +271,7 @@ Result<Scene> parse_scene(const std::string& json_text, const std::string& scene
     return Error{ErrorCode::invalid_argument,
                  "invalid JSON at " + line_column(json_text, e.byte) + ": " + reason};
   }
-  if (!duplicates->error.empty()) return Error{ErrorCode::invalid_argument, duplicates->error};
+  if (!tracker->error.empty()) return Error{ErrorCode::invalid_argument, tracker->error};
   try {
     return parse(root, scene_dir);
   } catch (const Invalid& e) {

@@ -1,0 +1,260 @@
+// parse_scene: every class of bad scene gives its own error naming the JSON
+// path; a good scene reads back exactly what write_scene wrote.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+#include <random>
+
+#include "scene.h"
+
+namespace octbake::scene {
+namespace {
+
+using nlohmann::json;
+
+json good_scene() {
+  return json::parse(R"({
+    "format": "octbake-scene/1",
+    "baked": "baked",
+    "camera": {"position": [0, 10, -60], "look_at": [0, 0, 0], "up": [0, 1, 0],
+               "fov_y_deg": 60, "viewport": [1920, 1080], "near": 0.1, "far": 2000},
+    "world": {"min": [-100, -100, -100], "max": [100, 100, 100], "depth": 4},
+    "timestep": 0.0333333333,
+    "frames": 7200,
+    "objects": [
+      {"name": "tree_0", "model": "tree", "position": [1.5, 0, 3],
+       "rotation": [0, 0, 0, 1], "scale": 1.0, "velocity": [0, 0, 0]},
+      {"name": "car_0", "model": "car", "position": [10, 0, 3]}
+    ]})");
+}
+
+// The error message of parsing `text`, or "" when it parses.
+std::string error_of(const std::string& text) {
+  Result<Scene> s = parse_scene(text, "scenes");
+  return s ? std::string() : s.error().message;
+}
+std::string error_of(const json& j) { return error_of(j.dump()); }
+
+TEST(Scene, GoodSceneParses) {
+  Result<Scene> s = parse_scene(good_scene().dump(), "scenes");
+  ASSERT_TRUE(s) << s.error().message;
+  EXPECT_EQ(s->baked, "scenes/baked");
+  EXPECT_EQ(s->frames, 7200);
+  EXPECT_EQ(s->world_depth, 4);
+  EXPECT_EQ(s->camera.viewport_w, 1920);
+  EXPECT_EQ(s->camera.viewport_h, 1080);
+  ASSERT_EQ(s->objects.size(), 2u);
+  EXPECT_EQ(s->objects[1].name, "car_0");
+  EXPECT_EQ(s->objects[1].model, "car");
+  EXPECT_EQ(s->objects[1].pose.scale, 1.0);  // defaults
+  EXPECT_TRUE(s->objects[1].pose.rotation.coeffs().isApprox(Eigen::Quaterniond::Identity().coeffs()));
+  EXPECT_TRUE(s->objects[1].velocity.isZero(0));
+  EXPECT_EQ(s->objects[0].pose.position, Eigen::Vector3d(1.5, 0, 3));
+}
+
+TEST(Scene, QuaternionOrderIsXyzw) {
+  json j = good_scene();
+  const double h = std::sqrt(0.5);
+  j["objects"][0]["rotation"] = {0, h, 0, h};  // 90 degrees about y
+  Result<Scene> s = parse_scene(j.dump(), "");
+  ASSERT_TRUE(s) << s.error().message;
+  Eigen::Vector3d x = s->objects[0].pose.rotation * Eigen::Vector3d(1, 0, 0);
+  EXPECT_TRUE(x.isApprox(Eigen::Vector3d(0, 0, -1), 1e-12)) << x.transpose();
+}
+
+TEST(Scene, UnknownKeyAtEveryLevel) {
+  for (const char* where : {"", "camera", "world", "objects"}) {
+    json j = good_scene();
+    json& target = std::string(where) == "" ? j : std::string(where) == "objects" ? j["objects"][1] : j[where];
+    target["colour"] = 1;
+    std::string expected = std::string(where) == ""          ? "colour: unknown key"
+                           : std::string(where) == "objects" ? "objects[1].colour: unknown key"
+                                                             : std::string(where) + ".colour: unknown key";
+    EXPECT_EQ(error_of(j), expected);
+  }
+}
+
+TEST(Scene, MissingRequiredKeys) {
+  struct Case {
+    std::vector<std::string> path;
+    const char* message;
+  };
+  for (const Case& c : std::vector<Case>{
+           {{"format"}, "format: missing required key"},
+           {{"camera"}, "camera: missing required key"},
+           {{"camera", "look_at"}, "camera.look_at: missing required key"},
+           {{"world", "min"}, "world.min: missing required key"},
+           {{"timestep"}, "timestep: missing required key"},
+           {{"frames"}, "frames: missing required key"},
+           {{"objects"}, "objects: missing required key"},
+           {{"objects", "0", "model"}, "objects[0].model: missing required key"},
+           {{"objects", "1", "position"}, "objects[1].position: missing required key"},
+       }) {
+    json j = good_scene();
+    json* parent = &j;
+    for (size_t i = 0; i + 1 < c.path.size(); ++i)
+      parent = parent->is_array() ? &(*parent)[std::stoul(c.path[i])] : &(*parent)[c.path[i]];
+    parent->erase(c.path.back());
+    EXPECT_EQ(error_of(j), c.message);
+  }
+}
+
+TEST(Scene, WrongTypes) {
+  json j = good_scene();
+  j["camera"]["fov_y_deg"] = "wide";
+  EXPECT_EQ(error_of(j), "camera.fov_y_deg: expected a number, got string");
+  j = good_scene();
+  j["objects"][0]["position"] = {1, 2};
+  EXPECT_EQ(error_of(j), "objects[0].position: expected an array of 3 numbers");
+  j = good_scene();
+  j["objects"][1]["velocity"] = {1, true, 3};
+  EXPECT_EQ(error_of(j), "objects[1].velocity[1]: expected a number, got boolean");
+  j = good_scene();
+  j["frames"] = 10.5;
+  EXPECT_EQ(error_of(j), "frames: expected an integer, got number");
+  j = good_scene();
+  j["objects"] = json::object();
+  EXPECT_EQ(error_of(j), "objects: expected an array, got object");
+  j = good_scene();
+  j["objects"][0]["name"] = 7;
+  EXPECT_EQ(error_of(j), "objects[0].name: expected a string, got number");
+  j = good_scene();
+  j["world"] = json::array();
+  EXPECT_EQ(error_of(j), "world: expected an object, got array");
+  EXPECT_EQ(error_of(std::string("[1, 2]")), "(root): expected an object, got array");
+}
+
+TEST(Scene, NonFiniteNumbers) {
+  // 1e999 overflows to infinity when read; JSON has no NaN literal at all.
+  for (const char* literal : {"1e999", "-1e999"}) {
+    json j = good_scene();
+    j["objects"][1]["scale"] = 12345.25;
+    std::string text = j.dump();
+    text.replace(text.find("12345.25"), 8, literal);
+    EXPECT_EQ(error_of(text), "objects[1].scale: not a finite number");
+    j = good_scene();
+    j["camera"]["position"][2] = 12345.25;
+    text = j.dump();
+    text.replace(text.find("12345.25"), 8, literal);
+    EXPECT_EQ(error_of(text), "camera.position[2]: not a finite number");
+  }
+  std::string text = good_scene().dump();
+  text.replace(text.find("0.0333333333"), 12, "NaN");
+  EXPECT_EQ(error_of(text).rfind("invalid JSON at line 1, column ", 0), 0u) << error_of(text);
+}
+
+TEST(Scene, RangeChecks) {
+  struct Case {
+    std::function<void(json&)> edit;
+    const char* message;
+  };
+  for (const Case& c : std::vector<Case>{
+           {[](json& j) { j["format"] = "octbake-scene/2"; },
+            "format: expected \"octbake-scene/1\", got \"octbake-scene/2\""},
+           {[](json& j) { j["camera"]["fov_y_deg"] = 180; }, "camera.fov_y_deg: must be in (0, 180)"},
+           {[](json& j) { j["camera"]["fov_y_deg"] = 0; }, "camera.fov_y_deg: must be in (0, 180)"},
+           {[](json& j) { j["camera"]["viewport"] = {1920, 0}; }, "camera.viewport[1]: must be in 1..1048576"},
+           {[](json& j) { j["camera"]["viewport"] = {1920.5, 10}; },
+            "camera.viewport[0]: expected an integer, got number"},
+           {[](json& j) { j["camera"]["near"] = 0; }, "camera.near: must be > 0"},
+           {[](json& j) { j["camera"]["far"] = 0.05; }, "camera.far: must be > near"},
+           {[](json& j) { j["camera"]["look_at"] = {0, 10, -60}; }, "camera.look_at: same as position"},
+           {[](json& j) { j["world"]["max"][1] = -100; }, "world.max: must be > world.min on every axis"},
+           {[](json& j) { j["world"]["depth"] = 11; }, "world.depth: must be in 0..10"},
+           {[](json& j) { j["timestep"] = 0; }, "timestep: must be > 0"},
+           {[](json& j) { j["frames"] = -1; }, "frames: must be >= 0"},
+           {[](json& j) { j["objects"][1]["scale"] = 0; }, "objects[1].scale: must be > 0"},
+           {[](json& j) { j["objects"][1]["scale"] = -2; }, "objects[1].scale: must be > 0"},
+           {[](json& j) { j["objects"][0]["rotation"] = {0, 0, 0, 1.00001}; },
+            "objects[0].rotation: not a unit quaternion"},
+           {[](json& j) { j["objects"][0]["rotation"] = {0, 0, 0, 0}; },
+            "objects[0].rotation: not a unit quaternion"},
+           {[](json& j) { j["objects"][1]["name"] = "tree_0"; }, "objects[1].name: duplicate name \"tree_0\""},
+           {[](json& j) { j["objects"][1]["name"] = "a,b"; },
+            "objects[1].name: must not contain a comma, a quote or a line break"},
+           {[](json& j) { j["objects"][1]["model"] = ""; }, "objects[1].model: must not be empty"},
+       }) {
+    json j = good_scene();
+    c.edit(j);
+    EXPECT_EQ(error_of(j), c.message);
+  }
+}
+
+TEST(Scene, RotationToleranceIsOneMillionth) {
+  // |q| - 1 within 1e-6 is accepted (and normalised); beyond it is refused.
+  json j = good_scene();
+  j["objects"][0]["rotation"] = {0, 0, 0, 1 + 0.9e-6};
+  Result<Scene> s = parse_scene(j.dump(), "");
+  ASSERT_TRUE(s) << s.error().message;
+  EXPECT_NEAR(s->objects[0].pose.rotation.norm(), 1.0, 1e-15);
+  j["objects"][0]["rotation"] = {0, 0, 0, 1 - 1.1e-6};
+  EXPECT_EQ(error_of(j), "objects[0].rotation: not a unit quaternion");
+}
+
+TEST(Scene, DuplicateJsonKeys) {
+  std::string text = good_scene().dump();
+  text.replace(text.find("\"scale\":1.0"), 11, "\"scale\":1.0,\"scale\":2.0");
+  EXPECT_EQ(error_of(text), "objects[0].scale: duplicate key");
+}
+
+TEST(Scene, InvalidJsonNamesLineAndColumn) {
+  std::string text = "{\n  \"format\": \"octbake-scene/1\",\n  \"frames\": 10,,\n}";
+  std::string e = error_of(text);
+  EXPECT_EQ(e.rfind("invalid JSON at line 3, column 16: ", 0), 0u) << e;
+  EXPECT_EQ(error_of(std::string()).rfind("invalid JSON at line 1, column 1: ", 0), 0u) << error_of(std::string());
+}
+
+TEST(Scene, AbsoluteBakedPathIsKept) {
+  json j = good_scene();
+  j["baked"] = "/data/baked";
+  Result<Scene> s = parse_scene(j.dump(), "scenes");
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->baked, "/data/baked");
+}
+
+// Random scenes survive write_scene -> parse_scene bit for bit.
+TEST(Scene, WriteParseRoundTripIsExact) {
+  std::mt19937 rng(12345);
+  auto real = [&](double lo, double hi) { return lo + (hi - lo) * (rng() * 0x1p-32); };
+  for (int round = 0; round < 50; ++round) {
+    Scene s;
+    s.world = {{-real(1, 1e6), -real(1, 1e6), -real(1, 1e6)}, {real(1, 1e6), real(1, 1e6), real(1, 1e6)}};
+    s.world_depth = static_cast<int>(rng() % 11);
+    s.timestep = real(1e-6, 1);
+    s.frames = rng() % 100000;
+    s.camera.position = {real(-9, 9), real(-9, 9), real(-9, 9)};
+    s.camera.fov_y_deg = real(1, 179);
+    const int n = static_cast<int>(rng() % 20);
+    for (int i = 0; i < n; ++i) {
+      SceneObject o;
+      o.name = "obj_" + std::to_string(i);
+      o.model = "m" + std::to_string(rng() % 3);
+      o.pose.position = {real(-1e5, 1e5), real(-1e-3, 1e-3), real(-7, 7)};
+      o.pose.rotation = Eigen::Quaterniond(real(-1, 1), real(-1, 1), real(-1, 1), real(-1, 1)).normalized();
+      o.pose.scale = real(1e-3, 1e3);
+      o.velocity = {real(-5, 5), 0, real(-1e-9, 1e-9)};
+      s.objects.push_back(o);
+    }
+    Result<Scene> back = parse_scene(write_scene(s, "b"), "");
+    ASSERT_TRUE(back) << back.error().message;
+    EXPECT_EQ(back->baked, "b");
+    EXPECT_EQ(back->world, s.world);
+    EXPECT_EQ(back->world_depth, s.world_depth);
+    EXPECT_EQ(back->timestep, s.timestep);
+    EXPECT_EQ(back->frames, s.frames);
+    EXPECT_EQ(back->camera.position, s.camera.position);
+    EXPECT_EQ(back->camera.fov_y_deg, s.camera.fov_y_deg);
+    ASSERT_EQ(back->objects.size(), s.objects.size());
+    for (size_t i = 0; i < s.objects.size(); ++i) {
+      EXPECT_EQ(back->objects[i].name, s.objects[i].name);
+      EXPECT_EQ(back->objects[i].model, s.objects[i].model);
+      EXPECT_EQ(back->objects[i].pose.position, s.objects[i].pose.position);
+      EXPECT_EQ(back->objects[i].pose.scale, s.objects[i].pose.scale);
+      EXPECT_EQ(back->objects[i].velocity, s.objects[i].velocity);
+      EXPECT_TRUE(back->objects[i].pose.rotation.coeffs().isApprox(s.objects[i].pose.rotation.coeffs(), 1e-15));
+    }
+  }
+}
+
+}  // namespace
+}  // namespace octbake::scene
