@@ -6,10 +6,13 @@
 #include <Eigen/Geometry>
 #include <assimp/Importer.hpp>
 #include <cmath>
+#include <algorithm>
+#include <cctype>
 #include <exception>
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <numeric>
 
 namespace octbake {
 namespace {
@@ -63,6 +66,79 @@ Result<bool> append_instance(const aiMesh& src, const Eigen::Matrix4d& to_world,
   return true;
 }
 
+// Joins exactly equal positions (assimp's JoinIdenticalVertices compares with
+// an epsilon, which would move geometry, and it silently merges NaNs away).
+// Sorting keeps the result independent of hash order.
+void join_identical(Mesh& mesh) {
+  const size_t n = mesh.positions.size();
+  std::vector<uint32_t> order(n);
+  std::iota(order.begin(), order.end(), 0u);
+  auto less = [&](uint32_t a, uint32_t b) {
+    const Eigen::Vector3d &p = mesh.positions[a], &q = mesh.positions[b];
+    if (p.x() != q.x()) return p.x() < q.x();
+    if (p.y() != q.y()) return p.y() < q.y();
+    if (p.z() != q.z()) return p.z() < q.z();
+    return a < b;
+  };
+  std::sort(order.begin(), order.end(), less);
+  // New index = rank of the first occurrence, so output order follows input order.
+  std::vector<uint32_t> first(n);
+  for (size_t i = 0; i < n; ++i)
+    first[order[i]] = (i > 0 && mesh.positions[order[i]] == mesh.positions[order[i - 1]]) ? first[order[i - 1]] : order[i];
+  std::vector<uint32_t> remap(n);
+  std::vector<Eigen::Vector3d> kept;
+  for (size_t i = 0; i < n; ++i) {
+    if (first[i] == i) {
+      remap[i] = static_cast<uint32_t>(kept.size());
+      kept.push_back(mesh.positions[i]);
+    } else {
+      remap[i] = remap[first[i]];
+    }
+  }
+  for (auto& t : mesh.triangles)
+    for (uint32_t& v : t) v = remap[v];
+  mesh.positions = std::move(kept);
+}
+
+// assimp's OFF reader trusts the header's counts and allocates (and zeroes)
+// that many vertices and faces before reading any: a 300-byte file can ask
+// for 20 GB. Refuse counts the file is too small to hold (an ASCII vertex
+// takes at least 6 bytes, a face at least 2).
+Result<bool> check_off_header(const std::string& path, uintmax_t size) {
+  std::ifstream in(path, std::ios::binary);
+  std::string head(4096, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<size_t>(in.gcount()));
+  std::vector<std::string> tokens;
+  size_t i = 0;
+  while (i < head.size() && tokens.size() < 3) {
+    const unsigned char ch = static_cast<unsigned char>(head[i]);
+    if (ch == '#') {
+      while (i < head.size() && head[i] != '\n') ++i;
+    } else if (std::isspace(ch)) {
+      ++i;
+    } else {
+      const size_t start = i;
+      while (i < head.size() && !std::isspace(static_cast<unsigned char>(head[i]))) ++i;
+      tokens.push_back(head.substr(start, i - start));
+    }
+  }
+  if (tokens.size() < 3 || tokens[0].find("OFF") == std::string::npos) return true;  // not OFF: assimp decides
+  auto count = [](const std::string& t) {
+    uintmax_t v = 0;
+    for (char ch : t) {
+      if (ch < '0' || ch > '9') break;
+      v = std::min<uintmax_t>(v * 10 + uintmax_t(ch - '0'), std::numeric_limits<uint32_t>::max() * uintmax_t{16});
+    }
+    return v;
+  };
+  const uintmax_t vertices = count(tokens[1]), faces = count(tokens[2]);
+  if (vertices * 6 > size || faces * 2 > size)
+    return refuse(ErrorCode::invalid_argument, "OFF header claims " + tokens[1] + " vertices and " + tokens[2] +
+                                                   " faces, more than the file can hold");
+  return true;
+}
+
 }  // namespace
 
 Result<Mesh> import_mesh(const std::string& path) {
@@ -73,15 +149,19 @@ Result<Mesh> import_mesh(const std::string& path) {
   if (fs::is_directory(st)) return refuse(ErrorCode::invalid_argument, "is a directory, not a mesh file");
   if (!fs::is_regular_file(st)) return refuse(ErrorCode::invalid_argument, "not a regular file");
   if (!std::ifstream(path, std::ios::binary)) return refuse(ErrorCode::io_error, "cannot open for reading");
-  if (fs::file_size(path, ec) == 0 && !ec) return refuse(ErrorCode::invalid_argument, "empty file");
+  const uintmax_t size = fs::file_size(path, ec);
+  if (ec) return refuse(ErrorCode::io_error, "cannot read the file size");
+  if (size == 0) return refuse(ErrorCode::invalid_argument, "empty file");
+  if (Result<bool> r = check_off_header(path, size); !r) return r.error();
 
   // No DefaultLogger is created, so assimp logs nothing. Our own walk of the
   // node graph applies the transforms (PreTransformVertices would also merge
-  // and reorder meshes); degenerate triangles are kept on purpose.
+  // and reorder meshes); degenerate triangles are kept on purpose; identical
+  // vertices are joined afterwards, exactly (join_identical).
   Assimp::Importer importer;
   const aiScene* scene = nullptr;
   try {
-    scene = importer.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_ValidateDataStructure);
+    scene = importer.ReadFile(path, aiProcess_Triangulate | aiProcess_ValidateDataStructure);
   } catch (const std::exception& e) {
     return refuse(ErrorCode::invalid_argument, one_line(e.what()));
   } catch (...) {
@@ -116,6 +196,7 @@ Result<Mesh> import_mesh(const std::string& path) {
     }
   }
   if (mesh.triangles.empty()) return refuse(ErrorCode::invalid_argument, "no triangles (points or lines only)");
+  join_identical(mesh);
   return mesh;
 }
 
