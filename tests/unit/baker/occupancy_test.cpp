@@ -111,7 +111,8 @@ TEST(TriangleOverlapsBox, DegenerateTrianglesSegmentsAndPoints) {
       default: hits += check_case(a, a, a, box); break;               // a point
     }
   }
-  EXPECT_GT(hits, kCases / 5);
+  EXPECT_GT(hits, kCases / 10);
+  EXPECT_LT(hits, kCases * 9 / 10);
 }
 
 TEST(TriangleOverlapsBox, SegmentThroughBoxWithNoVertexInside) {
@@ -119,9 +120,9 @@ TEST(TriangleOverlapsBox, SegmentThroughBoxWithNoVertexInside) {
   // Diagonal through the box, both ends far outside.
   EXPECT_TRUE(triangle_overlaps_box(V(-5, -5, -5), V(6, 6, 6), V(6, 6, 6), box.lo, box.hi, 0));
   EXPECT_TRUE(triangle_overlaps_box(V(-5, 0.5, 0.5), V(6, 0.5, 0.5), V(0.5, 0.5, 0.5), box.lo, box.hi, 0));
-  // Just grazing an edge of the box, and just missing it.
-  EXPECT_TRUE(triangle_overlaps_box(V(-1, 2, 0.5), V(2, -1, 0.5), V(2, -1, 0.5), box.lo, box.hi, 0));
-  EXPECT_FALSE(triangle_overlaps_box(V(-1, 2.01, 0.5), V(2.01, -1, 0.5), V(2.01, -1, 0.5), box.lo, box.hi, 0));
+  // Just grazing the box's (1, 1) edge from outside, and just missing it.
+  EXPECT_TRUE(triangle_overlaps_box(V(-1, 3, 0.5), V(3, -1, 0.5), V(3, -1, 0.5), box.lo, box.hi, 0));
+  EXPECT_FALSE(triangle_overlaps_box(V(-1, 3.01, 0.5), V(3.01, -1, 0.5), V(3.01, -1, 0.5), box.lo, box.hi, 0));
   // A big triangle that contains the box's centre plane but no box corner.
   EXPECT_TRUE(triangle_overlaps_box(V(-10, -10, 0.5), V(10, -10, 0.5), V(0, 10, 0.5), box.lo, box.hi, 0));
 }
@@ -150,7 +151,7 @@ TEST(TriangleOverlapsBox, PadGrowsTheBox) {
   const Box box{V(0, 0, 0), V(1, 1, 1)};
   const V a(1.1, 0.5, 0.5), b(1.2, 0.6, 0.5), c(1.2, 0.4, 0.6);
   EXPECT_FALSE(triangle_overlaps_box(a, b, c, box.lo, box.hi, 0.05));
-  EXPECT_TRUE(triangle_overlaps_box(a, b, c, box.lo, box.hi, 0.1));
+  EXPECT_TRUE(triangle_overlaps_box(a, b, c, box.lo, box.hi, 0.11));
   // A flat box (zero thickness) is still hit by a triangle crossing its plane.
   EXPECT_TRUE(triangle_overlaps_box(V(0.5, 0.5, -1), V(0.5, 0.6, 1), V(0.6, 0.5, 1), V(0, 0, 0), V(1, 1, 0), 0));
 }
