@@ -2,6 +2,7 @@
 
 #include <fcl/narrowphase/collision.h>
 
+#include <algorithm>
 #include <filesystem>
 
 namespace octbake::scene {
@@ -58,6 +59,49 @@ const Bvh& ExactMeshes::bvh(int model, double scale) {
 
 bool ExactMeshes::collide(int model_a, const Pose& a, int model_b, const Pose& b) {
   return bvh_collide(bvh(model_a, a.scale), a, bvh(model_b, b.scale), b);
+}
+
+Aabb mesh_bounds(const Mesh& mesh) {
+  Aabb box{mesh.positions[0], mesh.positions[0]};
+  for (const Eigen::Vector3d& p : mesh.positions) {
+    box.min = box.min.cwiseMin(p);
+    box.max = box.max.cwiseMax(p);
+  }
+  return box;
+}
+
+PairList overlapping_bounds(std::span<const Pose> poses, std::span<const int> mesh_of_object,
+                            std::span<const Aabb> local_bounds) {
+  const size_t n = poses.size();
+  std::vector<Aabb> world(n);
+  std::vector<uint32_t> order(n);
+  for (size_t i = 0; i < n; ++i) {
+    world[i] = world_bounds(place(local_bounds[mesh_of_object[i]], poses[i]));
+    order[i] = static_cast<uint32_t>(i);
+  }
+  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return world[a].min.x() < world[b].min.x(); });
+  PairList out;
+  for (size_t k = 0; k < n; ++k) {
+    const uint32_t i = order[k];
+    for (size_t l = k + 1; l < n && world[order[l]].min.x() <= world[i].max.x(); ++l) {
+      const uint32_t j = order[l];
+      if (world[i].min.y() > world[j].max.y() || world[j].min.y() > world[i].max.y()) continue;
+      if (world[i].min.z() > world[j].max.z() || world[j].min.z() > world[i].max.z()) continue;
+      out.emplace_back(std::min(i, j), std::max(i, j));
+    }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+ExactFrame exact_frame(std::span<const Pose> poses, std::span<const int> mesh_of_object,
+                       std::span<const Aabb> local_bounds, ExactMeshes& meshes) {
+  ExactFrame out;
+  for (const auto& [a, b] : overlapping_bounds(poses, mesh_of_object, local_bounds)) {
+    ++out.tested;
+    if (meshes.collide(mesh_of_object[a], poses[a], mesh_of_object[b], poses[b])) out.contacts.emplace_back(a, b);
+  }
+  return out;
 }
 
 }  // namespace octbake::scene

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -51,5 +52,23 @@ class ExactMeshes {
   std::vector<Mesh> meshes_;
   std::map<std::pair<int, double>, std::shared_ptr<Bvh>> bvhs_;
 };
+
+using PairList = std::vector<std::pair<uint32_t, uint32_t>>;
+
+// The mesh's own axis-aligned bounds (mesh non-empty).
+Aabb mesh_bounds(const Mesh& mesh);
+
+// The exact answer for one frame: object i is mesh mesh_of_object[i] (an id
+// in `meshes`, with local bounds local_bounds[that id]) at poses[i]. Pairs
+// whose world boxes overlap (sweep and prune on x) get the FCL test.
+struct ExactFrame {
+  PairList contacts;  // (a, b), a < b, sorted
+  uint64_t tested = 0;
+};
+ExactFrame exact_frame(std::span<const Pose> poses, std::span<const int> mesh_of_object,
+                       std::span<const Aabb> local_bounds, ExactMeshes& meshes);
+// The candidate pairs alone (world boxes overlap), sorted.
+PairList overlapping_bounds(std::span<const Pose> poses, std::span<const int> mesh_of_object,
+                            std::span<const Aabb> local_bounds);
 
 }  // namespace octbake::scene

@@ -30,8 +30,6 @@ double TradeRow::recall() const {
 
 namespace {
 
-using PairList = std::vector<std::pair<uint32_t, uint32_t>>;
-
 constexpr int kDefaultDepthCap = 8;  // deeper fixed runs cost much and teach little
 constexpr size_t kMissesKept = 20;
 constexpr double kScreenTolerances[] = {0.5, 1, 2, 4, 8};
@@ -74,49 +72,6 @@ uint64_t hash_poses(std::span<const Pose> poses) {
     mix(p.rotation.x()), mix(p.rotation.y()), mix(p.rotation.z()), mix(p.rotation.w()), mix(p.scale);
   }
   return h;
-}
-
-Aabb mesh_bounds(const Mesh& mesh) {
-  Aabb box{mesh.positions[0], mesh.positions[0]};
-  for (const Eigen::Vector3d& p : mesh.positions) {
-    box.min = box.min.cwiseMin(p);
-    box.max = box.max.cwiseMax(p);
-  }
-  return box;
-}
-
-// The exact answer for one frame: sweep and prune on world x over the meshes'
-// own bounds, FCL on the pairs whose world boxes overlap.
-struct ExactFrame {
-  PairList contacts;
-  uint64_t tested = 0;
-};
-
-ExactFrame exact_frame(std::span<const Pose> poses, std::span<const int> mesh_of_object,
-                       std::span<const Aabb> local_bounds, ExactMeshes& meshes) {
-  const size_t n = poses.size();
-  std::vector<Aabb> world(n);
-  std::vector<uint32_t> order(n);
-  for (size_t i = 0; i < n; ++i) {
-    world[i] = world_bounds(place(local_bounds[mesh_of_object[i]], poses[i]));
-    order[i] = static_cast<uint32_t>(i);
-  }
-  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return world[a].min.x() < world[b].min.x(); });
-  ExactFrame out;
-  for (size_t k = 0; k < n; ++k) {
-    const uint32_t i = order[k];
-    for (size_t l = k + 1; l < n && world[order[l]].min.x() <= world[i].max.x(); ++l) {
-      const uint32_t j = order[l];
-      if (world[i].min.y() > world[j].max.y() || world[j].min.y() > world[i].max.y()) continue;
-      if (world[i].min.z() > world[j].max.z() || world[j].min.z() > world[i].max.z()) continue;
-      ++out.tested;
-      if (meshes.collide(mesh_of_object[i], poses[i], mesh_of_object[j], poses[j])) {
-        out.contacts.emplace_back(std::min(i, j), std::max(i, j));
-      }
-    }
-  }
-  std::sort(out.contacts.begin(), out.contacts.end());
-  return out;
 }
 
 std::string depth_pairs_text(const std::map<std::pair<int, int>, uint64_t>& counts) {
