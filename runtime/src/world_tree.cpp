@@ -26,8 +26,9 @@ WorldTree::WorldTree(const Aabb& world, int depth) : world_(world), depth_(depth
 }
 
 // Monotone in p on every axis (subtraction and multiplication by a positive
-// constant round monotonically), so two boxes overlapping on an axis always
-// share a cell on it: the broadphase never misses a pair.
+// constant round monotonically, and clamping keeps order), so two boxes
+// overlapping on an axis always share a cell on it, inside the world or not:
+// the broadphase never misses a pair.
 WorldTree::Coord WorldTree::cell_of(const Eigen::Vector3d& p) const {
   Coord c;
   for (int k = 0; k < 3; ++k) {
@@ -93,8 +94,7 @@ bool WorldTree::update(uint32_t id, const Aabb& box) {
   const Coord lo = cell_of(box.min), hi = cell_of(box.max);
   uint64_t count = 1;
   for (int k = 0; k < 3; ++k) count *= uint64_t(hi[k]) - lo[k] + 1;
-  const bool outside = (box.min.array() < world_.min.array()).any() || (box.max.array() > world_.max.array()).any();
-  const bool overflow = outside || count > kMaxCells;
+  const bool overflow = count > kMaxCells;
 
   Entry& e = entries_[id];
   if (e.present) {

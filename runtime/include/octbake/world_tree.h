@@ -1,13 +1,19 @@
 // The WorldTree: a fixed octree over the world bounds whose leaves hold object
 // ids; objects sharing a leaf are candidate pairs. An object may sit in several
-// leaves. Objects (partly) outside the bounds also go to an overflow set that
-// is paired with everything, so nothing is ever dropped.
+// leaves.
 //
 // Only the leaf level is stored (a uniform grid of 2^depth cells per axis), and
 // only cells that hold something: a sparse table of cells plus, per object,
-// the cells it sits in. An object whose cell range exceeds kMaxCells (a ground
-// plane in a deep world) joins the overflow set instead of filling thousands
-// of cells. Overflow objects are in no cell.
+// the cells it sits in.
+//
+// Objects (partly) outside the world box are clamped into the border cells,
+// which thus reach to infinity. Clamping keeps the cell map monotone, so two
+// boxes that overlap always share a cell and nothing is ever dropped. (Pairing
+// outside objects with everything, the first design, made a frame quadratic as
+// soon as moving objects grazed the world's faces.) Only an object whose cell
+// range exceeds kMaxCells (a ground plane in a deep world) goes to the
+// overflow set, which is paired with everything, instead of filling thousands
+// of cells.
 //
 // Pairs are reported without duplicates and without a global sort: a pair is
 // emitted only by its *first common cell*, the cell (max of both objects' min
@@ -36,15 +42,15 @@ class WorldTree {
   static constexpr uint64_t kMaxCells = 1024;
 
   // Inserts object `id` or moves it to `box`. Returns true when its leaf set
-  // (the cell range its box covers, clamped to the grid) or its overflow
-  // membership changed, false when nothing needed re-inserting. A move that
+  // (the cell range its box covers, clamped to the grid) changed, false when nothing needed re-inserting. A move that
   // returns true counts one reinsertion; a first insertion does not. `box`
   // must not hold NaN.
   bool update(uint32_t id, const Aabb& box);
   void remove(uint32_t id);  // no-op for an absent id
 
   // Candidate pairs (a < b), each once, sorted ascending: every two objects
-  // sharing a cell, plus every overflow object with every other object.
+  // sharing a (clamped) cell, plus every overflow object with every other
+  // object. A superset of the pairs whose boxes overlap.
   // `out` is cleared first.
   void candidate_pairs(std::vector<std::pair<uint32_t, uint32_t>>& out) const;
 
