@@ -83,7 +83,9 @@ std::optional<Error> read_tree(const fb::Tree& tree, const std::string& where, T
     const std::string at = "level " + std::to_string(d) + ": ";
     if (level.compression() > fb::Compression::MAX) return bad(at + "unknown compression");
     if (d == 0) {
-      if (level.box_count() != 1 || level.raw_size() != 0 || stored != 0) return bad(at + "root level must be one box, no data");
+      if (level.box_count() != 1 || level.raw_size() != 0 || stored != 0) {
+        return bad(at + "root level must be one box, no data");
+      }
     } else {
       const uint64_t parents = info.box_count.back();
       if (level.raw_size() != parents) {
@@ -133,7 +135,8 @@ struct BakedFile::Impl {
     const size_t size = bytes.size();
     if (size < kMinFileBytes) {
       return fail(ErrorCode::truncated, label,
-                  std::to_string(size) + " bytes, shorter than any octbake file (" + std::to_string(kMinFileBytes) + ")");
+                  std::to_string(size) + " bytes, shorter than any octbake file (" +
+                      std::to_string(kMinFileBytes) + ")");
     }
     if (!flatbuffers::BufferHasIdentifier(bytes.data(), kFileIdentifier, /*size_prefixed=*/true)) {
       return fail(ErrorCode::bad_identifier, label, "not an octbake file (identifier is not \"OCTB\")");

@@ -91,7 +91,9 @@ TEST(Corruption, RandomByteFlipsFailCleanlyOrStillNest) {
   for (int trial = 0; trial < 3000; ++trial) {
     std::vector<uint8_t> bytes = clean;
     const int flips = 1 + static_cast<int>(test::below(rng, 3));
-    for (int k = 0; k < flips; ++k) bytes[test::below(rng, uint32_t(bytes.size()))] ^= uint8_t(1 + test::below(rng, 255));
+    for (int k = 0; k < flips; ++k) {
+      bytes[test::below(rng, uint32_t(bytes.size()))] ^= uint8_t(1 + test::below(rng, 255));
+    }
     Result<BakedFile> file = BakedFile::from_bytes(bytes, "flipped.oct");
     if (!file.ok()) {
       ++refused;
