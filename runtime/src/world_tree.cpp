@@ -38,51 +38,107 @@ WorldTree::Coord WorldTree::cell_of(const Eigen::Vector3d& p) const {
   return c;
 }
 
-uint32_t WorldTree::cell_slot(uint32_t x, uint32_t y, uint32_t z) {
-  const uint32_t key = x | (y << 10) | (z << 20);
-  auto [it, inserted] = cell_index_.try_emplace(key, 0);
-  if (inserted) {
-    if (free_cells_.empty()) {
-      it->second = uint32_t(cells_.size());
-      cells_.emplace_back();
-    } else {
-      it->second = free_cells_.back();
-      free_cells_.pop_back();
-    }
-    cells_[it->second].at = {uint16_t(x), uint16_t(y), uint16_t(z)};
-  }
-  return it->second;
+namespace {
+
+uint32_t pack(const std::array<uint16_t, 3>& c) { return uint32_t(c[0]) | (uint32_t(c[1]) << 10) | (uint32_t(c[2]) << 20); }
+
+// Fibonacci hashing of the packed coordinate into the table.
+size_t home(uint32_t key, size_t mask) { return size_t((key * 0x9E3779B97F4A7C15ull) >> 32) & mask; }
+
+bool inside(const std::array<uint16_t, 3>& c, const std::array<uint16_t, 3>& lo, const std::array<uint16_t, 3>& hi) {
+  for (int k = 0; k < 3; ++k)
+    if (c[k] < lo[k] || c[k] > hi[k]) return false;
+  return true;
 }
 
-void WorldTree::link(uint32_t id) {
-  Entry& e = entries_[id];
-  lo_[id] = e.lo;
-  if (e.overflow) {
-    insert_sorted(overflow_ids_, id);
-    return;
-  }
-  for (uint32_t z = e.lo[2]; z <= e.hi[2]; ++z)
-    for (uint32_t y = e.lo[1]; y <= e.hi[1]; ++y)
-      for (uint32_t x = e.lo[0]; x <= e.hi[0]; ++x) {
-        const uint32_t slot = cell_slot(x, y, z);
-        insert_sorted(cells_[slot].ids, id);
-        e.cells.push_back(slot);
-      }
+}  // namespace
+
+// Index of `key`'s entry, or of the empty entry where it would go.
+size_t WorldTree::table_find(uint32_t key) const {
+  const size_t mask = table_.size() - 1;
+  const uint64_t tag = uint64_t(key) + 1;
+  for (size_t i = home(key, mask);; i = (i + 1) & mask)
+    if (table_[i] == 0 || (table_[i] >> 32) == tag) return i;
 }
 
-void WorldTree::unlink(uint32_t id) {
+void WorldTree::table_grow() {
+  std::vector<uint64_t> old(std::max<size_t>(64, table_.size() * 2), 0);
+  old.swap(table_);
+  for (uint64_t e : old)
+    if (e != 0) table_[table_find(uint32_t((e >> 32) - 1))] = e;
+}
+
+uint32_t WorldTree::cell_slot(const Coord& at) {
+  if (2 * (table_used_ + 1) > table_.size()) table_grow();
+  const uint32_t key = pack(at);
+  const size_t i = table_find(key);
+  if (table_[i] != 0) return uint32_t(table_[i]);
+  uint32_t slot;
+  if (free_cells_.empty()) {
+    slot = uint32_t(cells_.size());
+    cells_.emplace_back();
+  } else {
+    slot = free_cells_.back();
+    free_cells_.pop_back();
+  }
+  cells_[slot].at = at;
+  table_[i] = ((uint64_t(key) + 1) << 32) | slot;
+  ++table_used_;
+  return slot;
+}
+
+void WorldTree::leave_cell(uint32_t slot, uint32_t id) {
+  Cell& cell = cells_[slot];
+  erase_sorted(cell.ids, id);
+  if (!cell.ids.empty()) return;
+  // Free the cell so a long run over a deep world does not accumulate them.
+  const size_t mask = table_.size() - 1;
+  size_t i = table_find(pack(cell.at));
+  // Backward-shift deletion: pull later entries of the probe run into the gap
+  // unless their home lies cyclically in (gap, j].
+  for (size_t j = (i + 1) & mask; table_[j] != 0; j = (j + 1) & mask) {
+    const size_t h = home(uint32_t((table_[j] >> 32) - 1), mask);
+    const bool stays = i <= j ? (i < h && h <= j) : (i < h || h <= j);
+    if (stays) continue;
+    table_[i] = table_[j];
+    i = j;
+  }
+  table_[i] = 0;
+  --table_used_;
+  free_cells_.push_back(slot);
+}
+
+void WorldTree::relink(uint32_t id, const Coord& lo, const Coord& hi, bool overflow) {
   Entry& e = entries_[id];
-  if (e.overflow) erase_sorted(overflow_ids_, id);
+  const bool was_linked = e.present && !e.overflow;
+  const bool was_overflow = e.present && e.overflow;
+  if (was_overflow && !overflow) erase_sorted(overflow_ids_, id);
+  if (overflow && !was_overflow) insert_sorted(overflow_ids_, id);
+  // Leave the cells outside the new range (all of them when going to overflow).
+  size_t kept = 0;
   for (uint32_t slot : e.cells) {
-    Cell& cell = cells_[slot];
-    erase_sorted(cell.ids, id);
-    if (cell.ids.empty()) {
-      // Free the cell so a long run over a deep world does not accumulate them.
-      cell_index_.erase(uint32_t(cell.at[0]) | (uint32_t(cell.at[1]) << 10) | (uint32_t(cell.at[2]) << 20));
-      free_cells_.push_back(slot);
-    }
+    if (!overflow && inside(cells_[slot].at, lo, hi))
+      e.cells[kept++] = slot;
+    else
+      leave_cell(slot, id);
   }
-  e.cells.clear();
+  e.cells.resize(kept);
+  if (!overflow) {
+    Coord c;
+    for (c[2] = lo[2]; c[2] <= hi[2]; ++c[2])
+      for (c[1] = lo[1]; c[1] <= hi[1]; ++c[1])
+        for (c[0] = lo[0]; c[0] <= hi[0]; ++c[0]) {
+          if (was_linked && inside(c, e.lo, e.hi)) continue;  // already there
+          const uint32_t slot = cell_slot(c);
+          insert_sorted(cells_[slot].ids, id);
+          e.cells.push_back(slot);
+        }
+  }
+  e.lo = lo;
+  e.hi = hi;
+  e.overflow = overflow;
+  e.present = true;
+  lo_[id] = lo;
 }
 
 bool WorldTree::update(uint32_t id, const Aabb& box) {
@@ -96,27 +152,23 @@ bool WorldTree::update(uint32_t id, const Aabb& box) {
   for (int k = 0; k < 3; ++k) count *= uint64_t(hi[k]) - lo[k] + 1;
   const bool overflow = count > kMaxCells;
 
-  Entry& e = entries_[id];
+  const Entry& e = entries_[id];
   if (e.present) {
     if (e.lo == lo && e.hi == hi && e.overflow == overflow) return false;
-    unlink(id);
     ++reinsertions_;
   } else {
-    e.present = true;
     insert_sorted(present_ids_, id);
   }
-  e.lo = lo;
-  e.hi = hi;
-  e.overflow = overflow;
-  link(id);
+  relink(id, lo, hi, overflow);
   return true;
 }
 
 void WorldTree::remove(uint32_t id) {
   if (!contains(id)) return;
-  unlink(id);
-  entries_[id].present = false;
-  entries_[id].overflow = false;
+  Entry& e = entries_[id];
+  if (e.overflow) erase_sorted(overflow_ids_, id);
+  for (uint32_t slot : e.cells) leave_cell(slot, id);
+  e = Entry{};
   erase_sorted(present_ids_, id);
 }
 

@@ -111,9 +111,12 @@ TEST_P(WorldTreeOracle, MatchesBruteForceThroughMovesAndRemovals) {
   EXPECT_GT(overlapping, 100u) << "the scene must have overlaps for the test to mean anything";
 
   uint64_t changes = 0;
-  for (int round = 0; round < 5; ++round) {
-    for (uint32_t i = 0; i < n; i += 3) {
-      const Eigen::Vector3d d(uniform(rng, -1.5, 1.5), uniform(rng, -1.5, 1.5), uniform(rng, -1.5, 1.5));
+  // Moves of every size: within a cell, to neighbours, across the world
+  // (cells emptied and refilled exercise the cell table's deletion).
+  for (int round = 0; round < 10; ++round) {
+    const double step = round % 3 == 0 ? 8.0 : round % 3 == 1 ? 1.5 : 0.2;
+    for (uint32_t i = round % 3; i < n; i += 3) {
+      const Eigen::Vector3d d(uniform(rng, -step, step), uniform(rng, -step, step), uniform(rng, -step, step));
       const Aabb moved{boxes[i].min + d, boxes[i].max + d};
       const bool expect_change = grid.range(moved) != grid.range(boxes[i]) || grid.overflow(moved) != grid.overflow(boxes[i]);
       EXPECT_EQ(tree.update(i, moved), expect_change) << "object " << i << " round " << round;
