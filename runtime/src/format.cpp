@@ -4,7 +4,6 @@
 #include <zstd.h>
 
 #include <cassert>
-#include <cmath>
 #include <memory>
 #include <set>
 

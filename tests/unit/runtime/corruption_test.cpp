@@ -2,6 +2,8 @@
 // Run under ASan+UBSan too (OCTBAKE_SANITIZE=ON).
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "baked_test_util.h"
 
 namespace octbake {
