@@ -148,7 +148,7 @@ void check(const PlacedTree& p) {
   assert(p.tree != nullptr);
   assert(p.depth >= 0 && p.depth <= p.tree->loaded_depth() && p.depth <= kMaxDepth);
   assert(std::isfinite(p.pose.scale) && p.pose.scale > 0);
-  assert(p.pose.position.allFinite() && p.pose.rotation.coeffs().allFinite());
+  assert(p.pose.position.allFinite() && std::abs(p.pose.rotation.norm() - 1) < 1e-6);
   (void)p;
 }
 

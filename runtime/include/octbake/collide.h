@@ -5,7 +5,15 @@
 // overlaps (early out). Boxes are compared as oriented boxes (separating axis
 // test) in A's frame, from the relative transform computed in double, each box
 // padded by a relative epsilon: if the meshes touch, the test reports it at
-// every depth pair. Symmetric in a and b.
+// every depth pair. Symmetric in a and b: the pair is put in a canonical order
+// by content first, so hit and box_tests do not depend on argument order.
+//
+// Padding: every box half extent grows by 1e-9 times the pair's coordinate
+// magnitude in A's frame (largest |local coordinate| of each root, B's scaled
+// by sb/sa, plus the offset between the two), far above double rounding and
+// far below a depth-12 leaf. A flat tree (zero-thickness axis) becomes a slab.
+// Preconditions (asserted): depth in 0..min(tree->loaded_depth(), 12), finite
+// pose, scale > 0, unit rotation. No heap allocation.
 #pragma once
 #include <cstdint>
 #include <vector>

@@ -21,6 +21,12 @@ struct Camera {
 // only the part in front of the near plane counts, clipped to the viewport;
 // 0 when wholly outside the view; the whole viewport when the box encloses the
 // camera. Always finite and >= 0.
+// Camera basis: forward = look_at - position (look_at == position looks down
+// -z); right = forward x up; an up parallel to forward (or zero) is replaced
+// by the world axis least aligned with forward. fov_y_deg is clamped into
+// (0, 180); the horizontal fov follows from the viewport aspect; a near plane
+// <= 0 acts as a tiny positive one. The far plane is ignored. A viewport with
+// a side <= 0 gives 0.
 double pixel_area(const Camera& camera, const OrientedBox& box);
 
 enum class LodPolicy { fixed, thesis, screen };

@@ -70,26 +70,32 @@ Pose at(Eigen::Vector3d p, Eigen::Quaterniond q = Eigen::Quaterniond::Identity()
 }
 
 // Independent reference: 15-axis separating test on world-space corners.
-bool boxes_overlap(const OrientedBox& a, const OrientedBox& b) {
-  auto corners = [](const OrientedBox& o) {
-    std::array<Eigen::Vector3d, 8> c;
-    for (int k = 0; k < 8; ++k)
-      c[k] = o.center + o.axes * Eigen::Vector3d((k & 1 ? 1 : -1) * o.half[0], (k & 2 ? 1 : -1) * o.half[1],
-                                                 (k & 4 ? 1 : -1) * o.half[2]);
-    return c;
-  };
-  const auto ca = corners(a), cb = corners(b);
-  std::vector<Eigen::Vector3d> axes;
+struct WorldBox {
+  OrientedBox box;
+  std::array<Eigen::Vector3d, 8> corners;
+};
+
+WorldBox world_box(const OrientedBox& o) {
+  WorldBox w{o, {}};
+  for (int k = 0; k < 8; ++k)
+    w.corners[k] = o.center + o.axes * Eigen::Vector3d((k & 1 ? 1 : -1) * o.half[0], (k & 2 ? 1 : -1) * o.half[1],
+                                                       (k & 4 ? 1 : -1) * o.half[2]);
+  return w;
+}
+
+bool boxes_overlap(const WorldBox& a, const WorldBox& b) {
+  std::array<Eigen::Vector3d, 15> axes;
+  int n = 0;
   for (int i = 0; i < 3; ++i) {
-    axes.push_back(a.axes.col(i));
-    axes.push_back(b.axes.col(i));
-    for (int j = 0; j < 3; ++j) axes.push_back(a.axes.col(i).cross(b.axes.col(j)));
+    axes[n++] = a.box.axes.col(i);
+    axes[n++] = b.box.axes.col(i);
+    for (int j = 0; j < 3; ++j) axes[n++] = a.box.axes.col(i).cross(b.box.axes.col(j));
   }
   for (const auto& axis : axes) {
     if (axis.norm() < 1e-12) continue;
     double amin = INFINITY, amax = -INFINITY, bmin = INFINITY, bmax = -INFINITY;
-    for (const auto& p : ca) amin = std::min(amin, p.dot(axis)), amax = std::max(amax, p.dot(axis));
-    for (const auto& p : cb) bmin = std::min(bmin, p.dot(axis)), bmax = std::max(bmax, p.dot(axis));
+    for (const auto& p : a.corners) amin = std::min(amin, p.dot(axis)), amax = std::max(amax, p.dot(axis));
+    for (const auto& p : b.corners) bmin = std::min(bmin, p.dot(axis)), bmax = std::max(bmax, p.dot(axis));
     if (amax < bmin || bmax < amin) return false;
   }
   return true;
@@ -198,12 +204,15 @@ TEST(Collide, AllLeafPairsMatchBruteForce) {
     };
     const PlacedTree a{&ta, random_pose(), depth_a}, b{&tb, random_pose(), depth_b};
 
+    const std::vector<BoxCoord> leaves_a = ta.masks().boxes(depth_a), leaves_b = tb.masks().boxes(depth_b);
+    std::vector<WorldBox> boxes_b;
+    for (const BoxCoord& cb : leaves_b) boxes_b.push_back(world_box(place(tb.masks().box_bounds(depth_b, cb), b.pose)));
     std::vector<LeafPair> expected;
-    for (const BoxCoord& ca : ta.masks().boxes(depth_a))
-      for (const BoxCoord& cb : tb.masks().boxes(depth_b))
-        if (boxes_overlap(place(ta.masks().box_bounds(depth_a, ca), a.pose),
-                          place(tb.masks().box_bounds(depth_b, cb), b.pose)))
-          expected.push_back({ca, cb});
+    for (const BoxCoord& ca : leaves_a) {
+      const WorldBox box_a = world_box(place(ta.masks().box_bounds(depth_a, ca), a.pose));
+      for (size_t j = 0; j < leaves_b.size(); ++j)
+        if (boxes_overlap(box_a, boxes_b[j])) expected.push_back({ca, leaves_b[j]});
+    }
 
     std::vector<LeafPair> found, found_ba;
     const PairTest all = collide_all(a, b, found);
