@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <utility>
 
 namespace octbake {
 
@@ -172,35 +173,58 @@ void WorldTree::remove(uint32_t id) {
   erase_sorted(present_ids_, id);
 }
 
+namespace {
+
+// LSD radix sort of pairs by (first, second), 8 bits per pass, skipping the
+// passes whose digit is the same in every key (ids < 2^17 need only ~5 of 8).
+void radix_sort(std::vector<std::pair<uint32_t, uint32_t>>& v) {
+  const auto key = [](const std::pair<uint32_t, uint32_t>& p) { return (uint64_t(p.first) << 32) | p.second; };
+  std::array<std::array<uint32_t, 256>, 8> count{};
+  for (const auto& p : v) {
+    const uint64_t k = key(p);
+    for (int d = 0; d < 8; ++d) ++count[d][(k >> (8 * d)) & 0xFF];
+  }
+  std::vector<std::pair<uint32_t, uint32_t>> tmp(v.size());
+  for (int d = 0; d < 8; ++d) {
+    auto& c = count[d];
+    if (std::find(c.begin(), c.end(), uint32_t(v.size())) != c.end()) continue;  // one bucket: no-op pass
+    uint32_t sum = 0;
+    for (uint32_t& n : c) sum += std::exchange(n, sum);
+    for (const auto& p : v) tmp[c[(key(p) >> (8 * d)) & 0xFF]++] = p;
+    v.swap(tmp);
+  }
+}
+
+}  // namespace
+
+// Cells in storage order (most hold one object and are skipped without
+// touching their id list), each pair emitted only by its first common cell,
+// then one radix sort: cheaper than visiting every object's cells in id order.
 void WorldTree::candidate_pairs(std::vector<std::pair<uint32_t, uint32_t>>& out) const {
   out.clear();
-  for (size_t n = 0; n < present_ids_.size(); ++n) {
-    const uint32_t a = present_ids_[n];
-    const Entry& ea = entries_[a];
-    if (ea.overflow) {
-      for (size_t m = n + 1; m < present_ids_.size(); ++m) out.emplace_back(a, present_ids_[m]);
-      continue;
-    }
-    const size_t first = out.size();
-    const Coord la = ea.lo;
-    for (uint32_t slot : ea.cells) {
-      const Cell& cell = cells_[slot];
+  for (const Cell& cell : cells_) {
+    const std::vector<uint32_t>& ids = cell.ids;
+    if (ids.size() < 2) continue;
+    for (size_t i = 0; i + 1 < ids.size(); ++i) {
+      const uint32_t a = ids[i];
+      const Coord& la = lo_[a];
       // The first common cell of a and b is max(la, lb) per axis; since both
       // are in this cell, it is this cell iff on each axis one of them starts here.
       const bool ax = cell.at[0] == la[0], ay = cell.at[1] == la[1], az = cell.at[2] == la[2];
-      auto it = std::upper_bound(cell.ids.begin(), cell.ids.end(), a);
-      for (; it != cell.ids.end(); ++it) {
-        const uint32_t b = *it;
-        const Coord& lb = lo_[b];
+      for (size_t j = i + 1; j < ids.size(); ++j) {
+        const Coord& lb = lo_[ids[j]];
         if ((ax || cell.at[0] == lb[0]) && (ay || cell.at[1] == lb[1]) && (az || cell.at[2] == lb[2]))
-          out.emplace_back(a, b);
+          out.emplace_back(a, ids[j]);
       }
     }
-    // Overflow objects are in no cell, so these never repeat a cell pair.
-    for (auto it = std::upper_bound(overflow_ids_.begin(), overflow_ids_.end(), a); it != overflow_ids_.end(); ++it)
-      out.emplace_back(a, *it);
-    std::sort(out.begin() + first, out.end());
   }
+  // Overflow objects are in no cell, so these never repeat a cell pair.
+  for (uint32_t a : overflow_ids_)
+    for (uint32_t b : present_ids_) {
+      if (b == a || (entries_[b].overflow && b < a)) continue;  // an overflow pair once
+      out.emplace_back(std::min(a, b), std::max(a, b));
+    }
+  radix_sort(out);
 }
 
 }  // namespace octbake

@@ -15,12 +15,12 @@
 // overflow set, which is paired with everything, instead of filling thousands
 // of cells.
 //
-// Pairs are reported without duplicates and without a global sort: a pair is
+// Pairs are reported without duplicates and without a dedup pass: a pair is
 // emitted only by its *first common cell*, the cell (max of both objects' min
-// cell, per axis), which both objects hold whenever they share any cell. Pairs
-// are gathered per object a (each b > a), so sorting each object's short list
-// leaves the whole output sorted. Cost: the sum over cells of (occupants)^2,
-// i.e. the true candidate set, plus |overflow| * |objects|.
+// cell, per axis), which both objects hold whenever they share any cell.
+// Cells are scanned in storage order (one-object cells cost one size check),
+// then the pairs are radix sorted. Cost: the sum over cells of occupants^2,
+// i.e. the true candidate set, plus |overflow| * |objects|, all linear.
 #pragma once
 #include <array>
 #include <cstdint>
