@@ -50,7 +50,9 @@ std::string human_rate(double per_second) {
 class Reporter {
  public:
   Reporter(size_t n, std::FILE* err, bool progress)
-      : outcome_(n, Outcome::pending), error_(n), err_(err), progress_(progress), start_(Clock::now()) {}
+      : outcome_(n, Outcome::pending), error_(n), err_(err), progress_(progress), start_(Clock::now()) {
+    draw_line();
+  }
 
   void finish(size_t i, Outcome outcome, std::string error = {}, uint64_t triangles = 0) {
     std::lock_guard lock(mu_);

@@ -44,8 +44,11 @@ int main(int argc, char** argv) {
 
   try {
     app.parse(argc, argv);
+  } catch (const CLI::CallForVersion&) {
+    std::printf("octbake %s\n", OCTBAKE_VERSION);
+    return 0;
   } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help
     std::string message = e.what();
     std::replace(message.begin(), message.end(), '\n', ' ');
     std::fprintf(stderr, "octbake: error: %s (see octbake --help)\n", message.c_str());

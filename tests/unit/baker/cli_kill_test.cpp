@@ -37,7 +37,7 @@ TEST(CliKill, TargetIsAlwaysTheOldOrTheNewCompleteFile) {
   // ~304k triangles at depth 10 (a 3 s bake); smaller under the sanitizers,
   // which are ~10x slower, so the suite stays within minutes.
 #if defined(__SANITIZE_ADDRESS__)
-  const int rings = 160, depth = 9;
+  const int rings = 110, depth = 8;
 #else
   const int rings = 390, depth = 10;
 #endif
