@@ -10,7 +10,8 @@ set(prefix ${WORK_DIR}/prefix)
 set(build ${WORK_DIR}/build)
 file(REMOVE_RECURSE ${WORK_DIR})
 
-run(${CMAKE_COMMAND} --install ${OCTBAKE_BUILD_DIR} --prefix ${prefix})
+# Only the library package: the tools' install rules need the tools built.
+run(${CMAKE_COMMAND} --install ${OCTBAKE_BUILD_DIR} --prefix ${prefix} --component runtime)
 foreach(f include/octbake.h include/octbake/world.h)
   if(NOT EXISTS ${prefix}/${f})
     message(FATAL_ERROR "not installed: ${f}")
