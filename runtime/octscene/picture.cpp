@@ -63,7 +63,7 @@ Raster render_tree(const ObjectTree& tree, const Mesh* mesh, int depth, int size
   if (mesh) draw_mesh(raster, *mesh, Pose{}, kMeshGrey);
   const std::vector<BoxCoord> boxes = tree.masks().boxes(depth);
   // Thin lines over many boxes turn to a smear: fade them as the depth grows.
-  const double alpha = boxes.size() > 4000 ? 0.55 : 0.9;
+  const double alpha = boxes.size() > 1000 ? 0.5 : 0.9;
   for (const BoxCoord& c : boxes) raster.box_edges(axis_box(tree.masks().box_bounds(depth, c)), kBoxRed, alpha, 0.22);
   const int scale = std::max(1, size / 240);
   raster.text(8, 8, "depth " + std::to_string(depth) + ": " + std::to_string(boxes.size()) + " boxes", kInk, scale);
@@ -244,8 +244,10 @@ int picture_scene(const SceneArgs& a) {
   }
   static const char* const kPolicy[] = {"fixed", "thesis", "screen"};
   char title[96];
-  std::snprintf(title, sizeof title, "frame %lld, LOD %s", static_cast<long long>(a.frame),
-                kPolicy[static_cast<int>(a.lod.policy)]);
+  int deepest = 0;
+  for (const ObjectTree& t : models->trees) deepest = std::max(deepest, t.loaded_depth());
+  std::snprintf(title, sizeof title, "frame %lld, LOD %s, depths %d-%d", static_cast<long long>(a.frame),
+                kPolicy[static_cast<int>(a.lod.policy)], a.lod.min_depth, std::min(a.lod.max_depth, deepest));
   const int width = a.width > 0 ? a.width : std::min(scene->camera.viewport_w, 1280);
   return write_or_fail(render_scene(*scene, poses, depths, meshes, trees, title, width), a.out);
 }
@@ -288,7 +290,7 @@ int picture_main(int argc, char** argv) {
   sc->add_option("--width", s.width, "picture width (default: viewport, at most 1280)")->check(CLI::Range(64, 8192));
 
   try {
-    app.parse(argc - 1, argv + 1);
+    app.parse(argc, argv);  // argv[0] is the subcommand name, skipped like a program name
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }

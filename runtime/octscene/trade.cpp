@@ -300,7 +300,7 @@ int trade_main(int argc, char** argv) {
   app.add_option("--plot", plot_path, "write an SVG of cost against precision");
   app.add_option("--csv", csv_path, "write one CSV row per setting");
   try {
-    app.parse(argc - 1, argv + 1);
+    app.parse(argc, argv);  // argv[0] is the subcommand name, skipped like a program name
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
