@@ -181,7 +181,8 @@ TEST_F(ImportTest, RefusesMissingEmptyAndDirectory) {
   EXPECT_EQ(missing.error().code, ErrorCode::not_found);
   expect_refused(write("empty.obj", ""));
   expect_refused(dir_.string());
-  expect_refused(write("junk.obj", std::string("\x00\x01\x02garbage\xff\xfe", 14)));
+  const char junk[] = "\x00\x01\x02garbage\xff\xfe";
+  expect_refused(write("junk.obj", std::string(junk, sizeof junk - 1)));
   expect_refused(write("junk.bin", "this is not a mesh at all\n"));
 }
 
