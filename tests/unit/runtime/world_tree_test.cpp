@@ -97,7 +97,7 @@ TEST_P(WorldTreeOracle, MatchesBruteForceThroughMovesAndRemovals) {
   std::mt19937 rng(1234 + depth);
 
   // Reach 11 > 10: some boxes poke out or lie wholly outside the world.
-  const uint32_t n = 400;
+  const uint32_t n = depth == 0 ? 200 : 400;  // depth 0: every pair is a candidate
   std::vector<Aabb> boxes(n);
   std::vector<bool> present(n, true);
   for (uint32_t i = 0; i < n; ++i) {
@@ -108,7 +108,7 @@ TEST_P(WorldTreeOracle, MatchesBruteForceThroughMovesAndRemovals) {
   Pairs pairs;
   tree.candidate_pairs(pairs);
   const size_t overlapping = check_pairs(grid, boxes, present, pairs);
-  EXPECT_GT(overlapping, 100u) << "the scene must have overlaps for the test to mean anything";
+  EXPECT_GT(overlapping, 40u) << "the scene must have overlaps for the test to mean anything";
 
   uint64_t changes = 0;
   // Moves of every size: within a cell, to neighbours, across the world
