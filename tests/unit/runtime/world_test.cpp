@@ -182,7 +182,7 @@ std::vector<ObjectDesc> random_scene(const std::vector<ObjectTree>& trees, uint3
   std::mt19937 rng(seed);
   std::vector<ObjectDesc> objects;
   for (int i = 0; i < n; ++i) {
-    ObjectDesc o = desc(trees[rng() % trees.size()], {}, {});
+    ObjectDesc o = desc(trees[rng() % trees.size()], Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
     for (int k = 0; k < 3; ++k) o.pose.position[k] = uniform(rng, -20, 20);
     if (i % 3 != 0)
       for (int k = 0; k < 3; ++k) o.velocity[k] = uniform(rng, -6, 6);
