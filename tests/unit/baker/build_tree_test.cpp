@@ -11,13 +11,15 @@
 #include <string>
 #include <vector>
 
+#include "seeded_random.h"
+
 namespace octbake {
 namespace {
 
 using V = Eigen::Vector3d;
 
-double uniform(std::mt19937& g, double lo, double hi) { return lo + (hi - lo) * (g() / 4294967296.0); }
-V random_point(std::mt19937& g, double lo, double hi) { return {uniform(g, lo, hi), uniform(g, lo, hi), uniform(g, lo, hi)}; }
+using test::random_point;
+using test::uniform;
 
 // Dense occupancy of one depth (depth <= 7 keeps it small).
 struct Grid {

@@ -8,15 +8,15 @@
 #include <random>
 #include <vector>
 
+#include "seeded_random.h"
+
 namespace octbake {
 namespace {
 
 using V = Eigen::Vector3d;
 
-// Uniform in [lo, hi) from raw generator output (std distributions differ
-// between standard libraries).
-double uniform(std::mt19937& g, double lo, double hi) { return lo + (hi - lo) * (g() / 4294967296.0); }
-V random_point(std::mt19937& g, double lo, double hi) { return {uniform(g, lo, hi), uniform(g, lo, hi), uniform(g, lo, hi)}; }
+using test::random_point;
+using test::uniform;
 
 struct Box {
   V lo, hi;

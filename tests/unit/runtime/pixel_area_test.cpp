@@ -8,20 +8,13 @@
 
 #include "octbake/lod.h"
 
+#include "seeded_random.h"
+
 namespace octbake {
 namespace {
 
-double uniform01(std::mt19937& rng) {  // 53 random bits, same on every library
-  const uint64_t hi = rng() >> 5, lo = rng() >> 6;
-  return double((hi << 26) | lo) * 0x1p-53;
-}
-
-Eigen::Quaterniond random_rotation(std::mt19937& rng) {  // Shoemake, uniform on SO(3)
-  const double u1 = uniform01(rng), u2 = 2 * std::numbers::pi * uniform01(rng),
-               u3 = 2 * std::numbers::pi * uniform01(rng);
-  return Eigen::Quaterniond(std::sqrt(u1) * std::cos(u3), std::sqrt(1 - u1) * std::sin(u2),
-                            std::sqrt(1 - u1) * std::cos(u2), std::sqrt(u1) * std::sin(u3));
-}
+using test::random_rotation;
+using test::uniform01;
 
 Eigen::Vector3d random_vector(std::mt19937& rng, double r) {
   return {r * (2 * uniform01(rng) - 1), r * (2 * uniform01(rng) - 1), r * (2 * uniform01(rng) - 1)};
