@@ -113,8 +113,12 @@ void poke(std::vector<uint8_t>& bytes, size_t offset, T value) {
   std::memcpy(bytes.data() + offset, &value, sizeof(T));
 }
 
+// A fresh folder per test: ctest runs tests in parallel, so a fixture's folder
+// name must include the running test's own name.
 inline std::string temp_dir(const std::string& name) {
-  const std::string dir = std::string(OCTBAKE_BINARY_DIR) + "/test_tmp/" + name;
+  const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  std::string dir = std::string(OCTBAKE_BINARY_DIR) + "/test_tmp/" + name;
+  if (info) dir += std::string("_") + info->test_suite_name() + "." + info->name();
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
