@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "box_mesh.h"
 #include "build_tree.h"
 #include "picture.h"
 #include "raster.h"
@@ -22,18 +23,7 @@
 namespace octbake::scene {
 namespace {
 
-Mesh box_mesh(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
-  Mesh m;
-  for (int j = 0; j < 8; ++j) m.positions.emplace_back((j & 1) ? hi.x() : lo.x(), (j & 2) ? hi.y() : lo.y(), (j & 4) ? hi.z() : lo.z());
-  for (uint32_t bit : {1u, 2u, 4u}) {
-    const uint32_t u = bit == 1 ? 2 : 1, v = bit == 4 ? 2 : 4;
-    for (uint32_t side : {0u, bit}) {
-      m.triangles.push_back({side, side | u, side | u | v});
-      m.triangles.push_back({side, side | u | v, side | v});
-    }
-  }
-  return m;
-}
+using testing::box_mesh;
 
 Camera looking_down_z(double distance) {
   Camera c;

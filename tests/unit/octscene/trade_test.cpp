@@ -9,6 +9,7 @@
 #include <numbers>
 #include <random>
 
+#include "box_mesh.h"
 #include "bake.h"
 #include "exact.h"
 #include "trade.h"
@@ -30,19 +31,7 @@ Eigen::Quaterniond random_rotation(std::mt19937& rng) {
   return Eigen::Quaterniond(v[3], v[0], v[1], v[2]);
 }
 
-// Axis-aligned box [lo, hi] as 12 triangles.
-Mesh box_mesh(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
-  Mesh m;
-  for (int j = 0; j < 8; ++j) m.positions.emplace_back((j & 1) ? hi.x() : lo.x(), (j & 2) ? hi.y() : lo.y(), (j & 4) ? hi.z() : lo.z());
-  for (uint32_t bit : {1u, 2u, 4u}) {
-    const uint32_t u = bit == 1 ? 2 : 1, v = bit == 4 ? 2 : 4;
-    for (uint32_t side : {0u, bit}) {
-      m.triangles.push_back({side, side | u, side | u | v});
-      m.triangles.push_back({side, side | u | v, side | v});
-    }
-  }
-  return m;
-}
+using testing::box_mesh;
 
 Mesh unit_cube() { return box_mesh({-0.5, -0.5, -0.5}, {0.5, 0.5, 0.5}); }
 
