@@ -45,6 +45,17 @@ WorldSettings settings(Response response, double timestep = 0.1) {
 
 bool same_bits(const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return std::memcmp(a.data(), b.data(), sizeof(double) * 3) == 0; }
 
+// Steps until a frame reports collisions (into c) or max_frames pass; returns
+// the frame that reported them.
+int step_until_contact(World& world, std::vector<Collision>& c, int max_frames) {
+  int f = 0;
+  while (c.empty() && f < max_frames) {
+    world.step(c);
+    ++f;
+  }
+  return f - 1;
+}
+
 // A unit cube moving +x at 4/s toward a static unit cube at x = 5, y offset
 // 0.1. They overlap iff |x_a - 5| <= 1 (the y, z overlaps hold throughout).
 struct HeadOn {
@@ -88,13 +99,8 @@ TEST(World, ThesisResponseReversesAndMovesByL) {
   HeadOn scene;
   World world(settings(Response::thesis, HeadOn::kDt), scene.objects());
   std::vector<Collision> c;
-  int f = 0;
-  while (c.empty() && f < 60) {
-    world.step(c);
-    ++f;
-  }
+  const int contact = step_until_contact(world, c, /*max_frames=*/60);
   ASSERT_EQ(c.size(), 1u);
-  const int contact = f - 1;
   EXPECT_TRUE(HeadOn::oracle_overlap(contact));
   EXPECT_FALSE(HeadOn::oracle_overlap(contact - 1));
   // l = (|v_a| + |v_b|) * 1.5 * dt, along the reversed velocity, then one step.
@@ -117,13 +123,9 @@ TEST(World, ThesisResponseMovesBothMovingObjects) {
   World world(settings(Response::thesis, dt),
               {desc(cube, {-1.99, 0, 0}, {4, 0, 0}), desc(cube, {2, 0.2, 0.3}, {-2, 0, 0})});
   std::vector<Collision> c;
-  int f = 0;
-  while (c.empty() && f < 40) {
-    world.step(c);
-    ++f;
-  }
+  const int contact = step_until_contact(world, c, /*max_frames=*/40);
   ASSERT_EQ(c.size(), 1u);
-  EXPECT_EQ(f - 1, 10);
+  EXPECT_EQ(contact, 10);
   const double l = (4 + 2) * 1.5 * dt;
   EXPECT_EQ(world.object(0).velocity, Eigen::Vector3d(-4, 0, 0));
   EXPECT_EQ(world.object(1).velocity, Eigen::Vector3d(2, 0, 0));
@@ -135,13 +137,8 @@ TEST(World, SeparateResponsePushesOutAlongLeastPenetration) {
   HeadOn scene;
   World world(settings(Response::separate, HeadOn::kDt), scene.objects());
   std::vector<Collision> c;
-  int f = 0;
-  while (c.empty() && f < 60) {
-    world.step(c);
-    ++f;
-  }
+  const int contact = step_until_contact(world, c, /*max_frames=*/60);
   ASSERT_EQ(c.size(), 1u);
-  const int contact = f - 1;
   // Penetration on x is x_a + 0.5 - 4.5 (< 0.4), less than on y (0.9) or z (1):
   // pushed back by it, then one step with the reflected velocity.
   const double push = HeadOn::x_a(contact) + 0.5 - 4.5;
