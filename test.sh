@@ -5,7 +5,8 @@ set -euo pipefail
 cd "$(dirname "$0")"
 ./scripts/setup.sh
 jobs=$(nproc)
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DOCTBAKE_WERROR=ON -DOCTBAKE_BUILD_TESTS=ON >/dev/null
+# Benchmarks are built (never run) so they cannot rot unnoticed.
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DOCTBAKE_WERROR=ON -DOCTBAKE_BUILD_TESTS=ON -DOCTBAKE_BENCH=ON >/dev/null
 cmake --build build -j"$jobs"
 ctest --test-dir build --output-on-failure -j"$jobs"
 cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-g -O1" -DOCTBAKE_WERROR=ON -DOCTBAKE_SANITIZE=ON -DOCTBAKE_BUILD_TESTS=ON >/dev/null
