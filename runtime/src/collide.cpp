@@ -190,8 +190,25 @@ BoxCoord to_coord(const std::array<uint16_t, 3>& c) { return {c[0], c[1], c[2]};
 }  // namespace
 
 PairTest collide(const PlacedTree& a, const PlacedTree& b) {
-  auto stop = [](const Entry&) { return true; };
-  return goes_first(a, b) ? descend(a, b, stop) : descend(b, a, stop);
+  LeafPair found;
+  if (goes_first(a, b)) {
+    PairTest t = descend(a, b, [&](const Entry& e) {
+      found = {to_coord(e.ca), to_coord(e.cb)};
+      return true;
+    });
+    t.leaf = found;
+    return t;
+  }
+  PairTest t = descend(b, a, [&](const Entry& e) {
+    found = {to_coord(e.cb), to_coord(e.ca)};
+    return true;
+  });
+  t.leaf = found;
+  return t;
+}
+
+OrientedBox leaf_box(const PlacedTree& p, const BoxCoord& c) {
+  return place(p.tree->masks().box_bounds(p.depth, c), p.pose);
 }
 
 PairTest collide_all(const PlacedTree& a, const PlacedTree& b, std::vector<LeafPair>& out) {

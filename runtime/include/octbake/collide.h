@@ -29,14 +29,20 @@ struct PlacedTree {
   int depth = 0;  // 0..tree->loaded_depth()
 };
 
-struct PairTest {
-  bool hit = false;
-  uint64_t box_tests = 0;  // box-box overlap tests done
-};
-
 struct LeafPair {
   BoxCoord a, b;  // at the pair's depths
 };
+
+struct PairTest {
+  bool hit = false;
+  uint64_t box_tests = 0;  // box-box overlap tests done
+  // With hit: the overlapping leaf pair that proved it (a in a's tree at
+  // a.depth, b in b's tree at b.depth, in the caller's argument order).
+  LeafPair leaf;
+};
+
+// Box c of `p`'s tree at depth p.depth, placed in the world.
+OrientedBox leaf_box(const PlacedTree& p, const BoxCoord& c);
 
 // Does any leaf of a (at a.depth) overlap any leaf of b (at b.depth)?
 PairTest collide(const PlacedTree& a, const PlacedTree& b);
