@@ -14,6 +14,8 @@ Result<TreeId> LevelCache::add(const BakedFile& file, size_t index) {
   if (index >= file.trees().size()) {
     return Error{ErrorCode::invalid_argument, file.path() + ": no tree " + std::to_string(index)};
   }
+  const auto [it, added] = ids_.try_emplace({&file, index}, static_cast<TreeId>(entries_.size()));
+  if (!added) return it->second;
   const TreeInfo& info = file.trees()[index];
   OctreeMasks root;
   root.bounds = info.bounds;

@@ -21,7 +21,9 @@
 // while its owner calls require() or set_budget().
 #pragma once
 #include <cstdint>
+#include <map>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "octbake/baked_file.h"
@@ -47,8 +49,10 @@ class LevelCache {
   LevelCache& operator=(LevelCache&&) noexcept = default;
 
   // Registers tree `index` of `file` and returns its id (0, 1, 2... in the
-  // order of add calls). The BakedFile must outlive the cache and stay where
-  // it is (not moved). Decodes nothing: the tree starts at depth 0.
+  // order trees are first added). Adding the same tree of the same file again
+  // returns the same id: instances of one model share one decoded tree. The
+  // BakedFile must outlive the cache and stay where it is (not moved).
+  // Decodes nothing: the tree starts at depth 0.
   // Errors: invalid_argument for a bad index.
   Result<TreeId> add(const BakedFile& file, size_t index);
 
@@ -76,7 +80,7 @@ class LevelCache {
   // the cache's lifetime (stable address, also across moves of the cache);
   // its loaded_depth() changes only inside require()/set_budget().
   const ObjectTree& tree(TreeId id) const;
-  // Number of registered trees.
+  // Number of registered (distinct) trees.
   size_t size() const { return entries_.size(); }
 
   // Sets the budget and evicts now if needed: deepest levels of the least
@@ -101,6 +105,7 @@ class LevelCache {
   uint64_t budget_;
   uint64_t use_clock_ = 0;
   std::vector<Entry> entries_;
+  std::map<std::pair<const BakedFile*, size_t>, TreeId> ids_;  // for add() of a tree already added
   CacheStats stats_;
 };
 

@@ -85,6 +85,11 @@ TEST_F(Cache, LevelsAreDecodedExactlyWhenFirstNeeded) {
   EXPECT_EQ(cache.stats().peak_bytes_held, bytes_at(1, 6));
   EXPECT_EQ(cache.stats().evictions, 0u);
   EXPECT_EQ(cache.stats().budget_clamps, 0u);
+  // The same tree again is the same entry; another tree of the file is not.
+  EXPECT_EQ(*cache.add(*file_, 1), *a);
+  EXPECT_EQ(*cache.add(*file_, 0), 1u);
+  EXPECT_EQ(cache.size(), 2u);
+  EXPECT_EQ(cache.held_depth(1), 0);
   // Moving the cache keeps the trees where they are.
   LevelCache moved = std::move(cache);
   EXPECT_EQ(&moved.tree(*a), address);
