@@ -5,6 +5,7 @@
 #include <zstd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -131,7 +132,10 @@ struct BakedFile::Impl {
   uint32_t format_version = 0;
   std::string baker_version;
   std::vector<TreeInfo> trees;
-  mutable LoadStats stats;
+  // Updated by concurrent const reads, hence atomic (relaxed: plain counters,
+  // they order nothing).
+  std::atomic<uint64_t> files_opened{0}, bytes_mapped{0};
+  mutable std::atomic<uint64_t> levels_decoded{0}, bytes_decompressed{0};
 
   // Everything before a byte of the file is trusted.
   std::optional<Error> verify() {
@@ -218,8 +222,8 @@ struct BakedFile::Impl {
       return Error{ErrorCode::corrupt, where + ": masks hold " + std::to_string(boxes) + " boxes, header says " +
                                            std::to_string(info.box_count[d])};
     }
-    stats.levels_decoded += 1;
-    stats.bytes_decompressed += out.size();
+    levels_decoded.fetch_add(1, std::memory_order_relaxed);
+    bytes_decompressed.fetch_add(out.size(), std::memory_order_relaxed);
     return out;
   }
 };
@@ -237,8 +241,8 @@ Result<BakedFile> BakedFile::open(const std::string& path) {
   impl->mapping = std::move(mapping).value();
   impl->bytes = impl->mapping.bytes();
   if (auto error = impl->verify()) return *error;
-  impl->stats.files_opened = 1;
-  impl->stats.bytes_mapped = impl->bytes.size();
+  impl->files_opened = 1;
+  impl->bytes_mapped = impl->bytes.size();
   return BakedFile(std::move(impl));
 }
 
@@ -260,7 +264,11 @@ const std::string& BakedFile::path() const { return impl_->label; }
 uint32_t BakedFile::format_version() const { return impl_->format_version; }
 const std::string& BakedFile::baker_version() const { return impl_->baker_version; }
 const std::vector<TreeInfo>& BakedFile::trees() const { return impl_->trees; }
-const LoadStats& BakedFile::stats() const { return impl_->stats; }
+LoadStats BakedFile::stats() const {
+  const auto get = [](const std::atomic<uint64_t>& n) { return n.load(std::memory_order_relaxed); };
+  return {get(impl_->files_opened), get(impl_->bytes_mapped), get(impl_->levels_decoded),
+          get(impl_->bytes_decompressed)};
+}
 
 Result<size_t> BakedFile::find(const std::string& name) const {
   for (size_t i = 0; i < impl_->trees.size(); ++i) {
@@ -285,6 +293,19 @@ Result<ObjectTree> BakedFile::load(size_t index, int depth) const {
     masks.masks.push_back(std::move(level).value());
   }
   return ObjectTree(info, std::move(masks));
+}
+
+Result<std::vector<uint8_t>> BakedFile::decode_level(size_t index, int level) const {
+  if (index >= impl_->trees.size()) {
+    return Error{ErrorCode::invalid_argument, impl_->label + ": no tree " + std::to_string(index)};
+  }
+  const TreeInfo& info = impl_->trees[index];
+  if (level < 1 || level > info.depth) {
+    return Error{ErrorCode::invalid_argument, tree_label(impl_->label, index, info.name) + ": no level " +
+                                                  std::to_string(level) + " (levels 1.." +
+                                                  std::to_string(info.depth) + ")"};
+  }
+  return impl_->decode_level(index, level);
 }
 
 // ---------------------------------------------------------------------------
@@ -355,7 +376,7 @@ Result<TreeInfo> ModelLibrary::info(const std::string& name) {
 LoadStats ModelLibrary::stats() const {
   LoadStats total;
   for (const auto& [path, file] : files_) {
-    const LoadStats& s = file.stats();
+    const LoadStats s = file.stats();
     total.files_opened += s.files_opened;
     total.bytes_mapped += s.bytes_mapped;
     total.levels_decoded += s.levels_decoded;

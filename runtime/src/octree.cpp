@@ -1,6 +1,7 @@
 #include "octbake/octree.h"
 
 #include <bit>
+#include <cassert>
 
 #include "octbake/object_tree.h"
 #include "octbake/result.h"
@@ -61,17 +62,35 @@ Aabb OctreeMasks::box_bounds(int d, BoxCoord c) const {
 }
 
 ObjectTree::ObjectTree(TreeInfo info, OctreeMasks masks) : info_(std::move(info)), masks_(std::move(masks)) {
-  first_child_.resize(masks_.masks.size());
-  for (size_t d = 0; d < masks_.masks.size(); ++d) {
-    const auto& level = masks_.masks[d];
-    auto& first = first_child_[d];
-    first.resize(level.size());
-    uint32_t next = 0;
-    for (size_t i = 0; i < level.size(); ++i) {
-      first[i] = next;
-      next += std::popcount(level[i]);
-    }
+  std::vector<std::vector<uint8_t>> levels = std::move(masks_.masks);
+  masks_.masks.clear();
+  for (auto& level : levels) push_level(std::move(level));
+}
+
+void ObjectTree::push_level(std::vector<uint8_t> masks) {
+  assert(masks.size() == box_count(loaded_depth()));
+  std::vector<uint32_t> first(masks.size());
+  uint32_t next = 0;
+  for (size_t i = 0; i < masks.size(); ++i) {
+    first[i] = next;
+    next += std::popcount(masks[i]);
   }
+  masks_.masks.push_back(std::move(masks));
+  first_child_.push_back(std::move(first));
+}
+
+void ObjectTree::pop_level() {
+  assert(loaded_depth() > 0);
+  masks_.masks.pop_back();
+  first_child_.pop_back();
+}
+
+uint64_t ObjectTree::level_bytes(int d) const {
+  return masks_.masks[d].size() * sizeof(uint8_t) + first_child_[d].size() * sizeof(uint32_t);
+}
+
+uint64_t ObjectTree::level_bytes(const TreeInfo& info, int k) {
+  return info.box_count[k - 1] * (sizeof(uint8_t) + sizeof(uint32_t));
 }
 
 }  // namespace octbake

@@ -5,6 +5,13 @@
 // offset. Level data is decompressed lazily by load(), only up to the depth
 // asked for, and each level's decoded size is checked against the header
 // before and after decompression (no decompression bombs).
+//
+// Thread safety: after open()/from_bytes() returns, a BakedFile is immutable
+// apart from its atomic work counters, so any number of threads may call its
+// const members (load, decode_level, trees, find, stats) at once, and share
+// the ObjectTrees load() returns read-only. Moving or destroying it needs
+// exclusive access (and no LevelCache still registered on it). A ModelLibrary
+// opens files lazily: use one per thread, or guard it.
 #pragma once
 #include <cstdint>
 #include <memory>
@@ -22,7 +29,7 @@ namespace octbake {
 struct LoadStats {
   uint64_t files_opened = 0;        // BakedFile::open calls that succeeded
   uint64_t bytes_mapped = 0;        // their file sizes (from_bytes maps nothing)
-  uint64_t levels_decoded = 0;      // levels 1..d produced by load()
+  uint64_t levels_decoded = 0;      // levels produced by load() and decode_level()
   uint64_t bytes_decompressed = 0;  // decoded bytes of those levels (raw ones copied)
 };
 
@@ -53,7 +60,14 @@ class BakedFile {
   // decompress_failed (broken frame, or one that lies about its size),
   // corrupt (decoded masks disagree with the header's box counts).
   Result<ObjectTree> load(size_t index, int depth) const;
-  const LoadStats& stats() const;
+  // Level `level` (1..baked depth) of tree `index` alone: the child masks of
+  // depth level-1, one byte per box of that depth, verified exactly as load()
+  // verifies it (size before and after decompression, box count). The
+  // streaming decoder of LevelCache. Errors: invalid_argument (index or level
+  // out of range), decompress_failed, corrupt.
+  Result<std::vector<uint8_t>> decode_level(size_t index, int level) const;
+  // A snapshot of the counters (they may move on while other threads decode).
+  LoadStats stats() const;
 
  private:
   struct Impl;

@@ -1,5 +1,9 @@
 // A decoded ObjectTree, ready for pair tests: occupancy down to loaded_depth()
 // plus, per depth, where each box's children start in the next depth.
+//
+// Thread safety: the const members only read, so one ObjectTree may be shared
+// by any number of threads as long as nobody calls push_level()/pop_level()
+// on it meanwhile (a LevelCache's trees change only inside its own calls).
 #pragma once
 #include <cstdint>
 #include <span>
@@ -25,6 +29,20 @@ class ObjectTree {
   uint8_t mask(int d, uint32_t i) const { return masks_.masks[d][i]; }
   // Index in depth d+1 of box i's first child (children are consecutive).
   uint32_t first_child(int d, uint32_t i) const { return first_child_[d][i]; }
+
+  // Growing and shrinking by levels (streaming, see level_cache.h).
+  // Appends the child masks of depth loaded_depth() (one byte per box of that
+  // depth, as BakedFile::decode_level returns them), so loaded_depth() grows
+  // by one. Precondition (asserted): masks.size() == box_count(loaded_depth()).
+  void push_level(std::vector<uint8_t> masks);
+  // Drops the deepest loaded level and frees its memory. Precondition: loaded_depth() > 0.
+  void pop_level();
+  // Memory held for the masks of depth d < loaded_depth(): the mask bytes plus
+  // the first-child table, (1 + 4) bytes per box of depth d.
+  uint64_t level_bytes(int d) const;
+  // The same cost predicted from a header, for level k = 1..info.depth of a
+  // file (the masks of depth k-1): what push_level of that level will hold.
+  static uint64_t level_bytes(const TreeInfo& info, int k);
 
  private:
   TreeInfo info_;

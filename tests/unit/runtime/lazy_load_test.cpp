@@ -48,6 +48,41 @@ TEST(LazyLoad, LevelsBeyondTheAskedDepthAreNotRead) {
   EXPECT_EQ(file->load(0, 4).error().code, ErrorCode::decompress_failed);
 }
 
+// decode_level(i, k) is level k alone, verified as load() verifies it.
+TEST(LazyLoad, DecodeLevelIsOneLevelOfLoad) {
+  std::mt19937 rng(62);
+  std::vector<TreeToEncode> trees;
+  for (Compression c : {Compression::zstd, Compression::none}) trees.push_back(test::random_tree(rng, "t" + std::to_string(trees.size()), 5, c));
+  const std::vector<uint8_t> bytes = encode_file(trees, "v");
+  Result<BakedFile> file = BakedFile::from_bytes(bytes, "mem");
+  ASSERT_TRUE(file.ok()) << file.error().message;
+  for (size_t t = 0; t < trees.size(); ++t) {
+    for (int k = 5; k >= 1; --k) {  // any order: levels are independent
+      Result<std::vector<uint8_t>> level = file->decode_level(t, k);
+      ASSERT_TRUE(level.ok()) << level.error().message;
+      EXPECT_EQ(*level, trees[t].masks.masks[k - 1]) << "tree " << t << " level " << k;
+    }
+  }
+  EXPECT_EQ(file->stats().levels_decoded, 10u);
+  for (int k : {0, 6, -1}) {
+    Result<std::vector<uint8_t>> bad = file->decode_level(0, k);
+    ASSERT_FALSE(bad.ok());
+    EXPECT_EQ(bad.error().code, ErrorCode::invalid_argument);
+    EXPECT_NE(bad.error().message.find("no level " + std::to_string(k)), std::string::npos) << bad.error().message;
+  }
+  EXPECT_EQ(file->decode_level(2, 1).error().code, ErrorCode::invalid_argument);
+  EXPECT_EQ(file->stats().levels_decoded, 10u);
+
+  // Damage is found the same way: broken level 4 of a forged file.
+  test::ForgedTree f = test::forged_from(test::full_masks(5), fb::Compression::Zstd);
+  f.levels[4].data.assign(f.levels[4].data.size(), 0x5A);
+  const std::vector<uint8_t> forged = test::forge({f});
+  Result<BakedFile> broken = BakedFile::from_bytes(forged, "forged");
+  ASSERT_TRUE(broken.ok());
+  EXPECT_TRUE(broken->decode_level(0, 5).ok());
+  EXPECT_EQ(broken->decode_level(0, 4).error().code, ErrorCode::decompress_failed);
+}
+
 class Library : public ::testing::Test {
  protected:
   void SetUp() override {
