@@ -15,6 +15,10 @@
 #include <cstring>
 #include <functional>
 
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
+
 namespace octbake {
 namespace {
 
@@ -29,6 +33,14 @@ constexpr double kRelPad = 1e-9;
 constexpr double kAxisPad = 1e-9;
 
 using Coord = std::array<uint16_t, 3>;
+
+// 2^-d for every depth (a table: std::ldexp is a library call).
+constexpr std::array<double, 2 * kMaxDepth + 1> kHalfPow = [] {
+  std::array<double, 2 * kMaxDepth + 1> h{};
+  double v = 1;
+  for (double& x : h) x = v, v *= 0.5;
+  return h;
+}();
 
 BoxCoord to_coord(const Coord& c) { return {c[0], c[1], c[2]}; }
 Coord from_coord(const BoxCoord& c) { return {uint16_t(c.x), uint16_t(c.y), uint16_t(c.z)}; }
@@ -103,74 +115,208 @@ bool occupied(const ObjectTree& tree, int depth, const BoxCoord& c) {
 // offset (B's centre minus A's, in A's frame), lanes in this order: A's faces
 // 0..2, B's faces 3..5, edge pairs A_i x B_j at 6 + 3i + j, lane 15 idle
 // (always 0 against radius 0). The pair is separated iff some |p_k| > r_k.
+//
+// children_overlap(parent, ra, rb, offset, scale, octant, n, out): the
+// children `octant[0..n)` of the split box against the other box. Child c's
+// projections are parent + scale * offset[octant[c]] (scale a power of two,
+// so the product is exact), written to out[c]; bit c of the
+// result is set iff child c overlaps (radii ra + rb lane by lane). Three
+// builds: plain C++, AVX2 and AVX-512. Each lane is one addition, one absolute
+// value and one ordered comparison, so all three give identical bits.
 constexpr int kLanes = 16;
 using Lanes = double[kLanes];
 
-using v4d = double __attribute__((vector_size(32)));
-using v4m = decltype(v4d{} < v4d{});  // lane masks from comparisons
+using Kernel = uint32_t (*)(const double* parent, const double* ra, const double* rb, const Lanes* offset,
+                            double scale, const uint8_t* octant, int n, Lanes* out);
 
-// By reference: a vector return value would make the ABI depend on -mavx.
-[[gnu::always_inline]] inline void load4(v4d& v, const double* p) { std::memcpy(&v, p, sizeof v); }
-
-// Children `octant[0..n)` of the split box against the other box: child c's
-// projections are parent + offset[octant[c]], written to out[c]; bit c of the
-// result is set iff child c overlaps. Radii: ra + rb lane by lane.
-[[gnu::always_inline]] inline uint32_t children_overlap(const double* parent, const double* ra, const double* rb,
-                                                        const Lanes* offset, const uint8_t* octant, int n,
-                                                        Lanes* out) {
-  v4d p[4], r[4];
-  for (int k = 0; k < 4; ++k) {
-    v4d rb_k;
-    load4(p[k], parent + 4 * k);
-    load4(r[k], ra + 4 * k);
-    load4(rb_k, rb + 4 * k);
-    r[k] += rb_k;
-  }
-  constexpr int64_t kNotSign = INT64_MAX;  // every bit but the sign: |x| in one AND
-  const v4m not_sign = {kNotSign, kNotSign, kNotSign, kNotSign};
+uint32_t children_overlap_portable(const double* parent, const double* ra, const double* rb, const Lanes* offset,
+                                   double scale, const uint8_t* octant, int n, Lanes* out) {
+  double radius[kLanes];
+  for (int k = 0; k < kLanes; ++k) radius[k] = ra[k] + rb[k];
   uint32_t overlapping = 0;
   for (int c = 0; c < n; ++c) {
     const double* o = offset[octant[c]];
-    v4m separated{};
-    for (int k = 0; k < 4; ++k) {
-      v4d q;
-      load4(q, o + 4 * k);
-      q += p[k];
-      std::memcpy(out[c] + 4 * k, &q, sizeof q);
-      const v4d abs_q = v4d(v4m(q) & not_sign);
-      separated |= abs_q > r[k];
+    bool separated = false;
+    for (int k = 0; k < kLanes; ++k) {
+      out[c][k] = parent[k] + o[k] * scale;
+      separated |= std::abs(out[c][k]) > radius[k];
     }
-    overlapping |= uint32_t((separated[0] | separated[1] | separated[2] | separated[3]) == 0) << c;
+    overlapping |= uint32_t(!separated) << c;
   }
   return overlapping;
 }
 
-uint32_t children_overlap_portable(const double* parent, const double* ra, const double* rb, const Lanes* offset,
-                                   const uint8_t* octant, int n, Lanes* out) {
-  return children_overlap(parent, ra, rb, offset, octant, n, out);
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define OCTBAKE_X86_KERNELS 1
+
+[[gnu::target("avx2")]] uint32_t children_overlap_avx2(const double* parent, const double* ra, const double* rb,
+                                                       const Lanes* offset, double scale, const uint8_t* octant,
+                                                       int n, Lanes* out) {
+  const __m256d s = _mm256_set1_pd(scale);
+  const __m256d not_sign = _mm256_castsi256_pd(_mm256_set1_epi64x(INT64_MAX));  // |x| is one AND
+  __m256d p[4], r[4];
+  for (int k = 0; k < 4; ++k) {
+    p[k] = _mm256_loadu_pd(parent + 4 * k);
+    r[k] = _mm256_add_pd(_mm256_loadu_pd(ra + 4 * k), _mm256_loadu_pd(rb + 4 * k));
+  }
+  uint32_t overlapping = 0;
+  for (int c = 0; c < n; ++c) {
+    const double* o = offset[octant[c]];
+    __m256d separated = _mm256_setzero_pd();
+    for (int k = 0; k < 4; ++k) {
+      const __m256d q = _mm256_add_pd(p[k], _mm256_mul_pd(_mm256_loadu_pd(o + 4 * k), s));
+      _mm256_storeu_pd(out[c] + 4 * k, q);
+      separated = _mm256_or_pd(separated, _mm256_cmp_pd(_mm256_and_pd(q, not_sign), r[k], _CMP_GT_OQ));
+    }
+    overlapping |= uint32_t(_mm256_movemask_pd(separated) == 0) << c;
+  }
+  return overlapping;
 }
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-[[gnu::target("avx2")]] uint32_t children_overlap_avx2(const double* parent, const double* ra, const double* rb,
-                                                       const Lanes* offset, const uint8_t* octant, int n,
-                                                       Lanes* out) {
-  return children_overlap(parent, ra, rb, offset, octant, n, out);
+[[gnu::target("avx512f")]] uint32_t children_overlap_avx512(const double* parent, const double* ra, const double* rb,
+                                                            const Lanes* offset, double scale, const uint8_t* octant,
+                                                            int n, Lanes* out) {
+  const __m512d s = _mm512_set1_pd(scale);
+  const __m512d p0 = _mm512_loadu_pd(parent), p1 = _mm512_loadu_pd(parent + 8);
+  const __m512d r0 = _mm512_add_pd(_mm512_loadu_pd(ra), _mm512_loadu_pd(rb));
+  const __m512d r1 = _mm512_add_pd(_mm512_loadu_pd(ra + 8), _mm512_loadu_pd(rb + 8));
+  uint32_t overlapping = 0;
+  for (int c = 0; c < n; ++c) {
+    const double* o = offset[octant[c]];
+    const __m512d q0 = _mm512_add_pd(p0, _mm512_mul_pd(_mm512_loadu_pd(o), s));
+    const __m512d q1 = _mm512_add_pd(p1, _mm512_mul_pd(_mm512_loadu_pd(o + 8), s));
+    _mm512_storeu_pd(out[c], q0);
+    _mm512_storeu_pd(out[c] + 8, q1);
+    const __mmask8 separated = __mmask8(_mm512_cmp_pd_mask(_mm512_abs_pd(q0), r0, _CMP_GT_OQ) |
+                                        _mm512_cmp_pd_mask(_mm512_abs_pd(q1), r1, _CMP_GT_OQ));
+    overlapping |= uint32_t(separated == 0) << c;
+  }
+  return overlapping;
 }
-bool cpu_has_avx2() { return __builtin_cpu_supports("avx2"); }
-#else
-uint32_t children_overlap_avx2(const double* parent, const double* ra, const double* rb, const Lanes* offset,
-                               const uint8_t* octant, int n, Lanes* out) {
-  return children_overlap(parent, ra, rb, offset, octant, n, out);
-}
-bool cpu_has_avx2() { return false; }
 #endif
 
-std::atomic<bool> force_portable{false};
+// ---- Per-pair lane tables -------------------------------------------------
+// Built once per pair test from the relative placement. Plain loops over the
+// 16 lanes, compiled once per ISA (vectorised by the compiler); the same
+// operations in the same order, so every build gives the same bits.
+struct TableInput {
+  Lanes w[3], abs_wa[3], abs_wb[3];  // projection and radius weights (see PairFrame)
+  double sr[3][3];                   // sR, column j = B's local axis j in A's frame
+  double quarter_a[3], quarter_b[3]; // a quarter of each root's size (local units)
+  double half_a[3], half_b[3];       // half of each root's size, B's scaled to A's units
+  double pad;
+  int depth_a, depth_b;
+};
 
-using Kernel = uint32_t (*)(const double*, const double*, const double*, const Lanes*, const uint8_t*, int, Lanes*);
-Kernel pick_kernel() {
-  static const bool avx2 = cpu_has_avx2();
-  return avx2 && !force_portable.load(std::memory_order_relaxed) ? children_overlap_avx2 : children_overlap_portable;
+struct LaneTables {
+  // Offsets of the 8 children at depth 1, octant order: at depth d they are
+  // these times 2^(1-d), exactly.
+  alignas(64) Lanes offset_a[8], offset_b[8];
+  // Radius of every padded box on every axis, per depth.
+  alignas(64) Lanes radius_a[kMaxDepth + 1], radius_b[kMaxDepth + 1];
+};
+
+// A child at depth 1 sits at the root's centre +- q on each axis m of its
+// tree; weights[m] give the effect on the projections. Octants 7 - j are the
+// negations of octants j (negation is exact).
+[[gnu::always_inline]] inline void fill_offsets(Lanes* offset, const Lanes* weights, const double* q, double sign) {
+  Lanes e[3];
+#pragma GCC unroll 1
+  for (int m = 0; m < 3; ++m) {
+    const double f = sign * q[m];
+    for (int k = 0; k < kLanes; ++k) e[m][k] = weights[m][k] * f;
+  }
+  Lanes s01, d01;  // +x+y, +x-y
+  for (int k = 0; k < kLanes; ++k) s01[k] = e[0][k] + e[1][k];
+  for (int k = 0; k < kLanes; ++k) d01[k] = e[0][k] - e[1][k];
+  for (int k = 0; k < kLanes; ++k) offset[0][k] = -(s01[k] + e[2][k]);  // -x-y-z
+  for (int k = 0; k < kLanes; ++k) offset[1][k] = d01[k] - e[2][k];     // +x-y-z
+  for (int k = 0; k < kLanes; ++k) offset[2][k] = -(d01[k] + e[2][k]);  // -x+y-z
+  for (int k = 0; k < kLanes; ++k) offset[3][k] = s01[k] - e[2][k];     // +x+y-z
+#pragma GCC unroll 1
+  for (int j = 0; j < 4; ++j)
+    for (int k = 0; k < kLanes; ++k) offset[7 - j][k] = -offset[j][k];
+}
+
+// Radius of the padded box at each depth: weights . (half / 2^d + pad).
+[[gnu::always_inline]] inline void fill_radii(Lanes* radius, const Lanes* weights, const double* half, double pad,
+                                              int depth) {
+  Lanes base, padding;
+  for (int k = 0; k < kLanes; ++k) {
+    base[k] = (weights[0][k] * half[0] + weights[1][k] * half[1]) + weights[2][k] * half[2];
+    padding[k] = ((weights[0][k] + weights[1][k]) + weights[2][k]) * pad;
+  }
+#pragma GCC unroll 1
+  for (int d = 0; d <= depth; ++d) {
+    const double scale = kHalfPow[d];
+    for (int k = 0; k < kLanes; ++k) radius[d][k] = base[k] * scale + padding[k];
+  }
+}
+
+[[gnu::always_inline]] inline void build_tables(const TableInput& in, LaneTables& out) {
+  // B's local axis j moves its centre by sR e_j in A's frame.
+  // (Loops over lanes innermost and kept rolled outside: GCC then vectorises
+  // across the lanes.)
+  Lanes wb[3];
+#pragma GCC unroll 1
+  for (int j = 0; j < 3; ++j) {
+    const double s0 = in.sr[0][j], s1 = in.sr[1][j], s2 = in.sr[2][j];
+    for (int k = 0; k < kLanes; ++k) wb[j][k] = (in.w[0][k] * s0 + in.w[1][k] * s1) + in.w[2][k] * s2;
+  }
+  // t = centre B - centre A: A's child moving by +q moves t by -q.
+  fill_offsets(out.offset_a, in.w, in.quarter_a, -1.0);
+  fill_offsets(out.offset_b, wb, in.quarter_b, 1.0);
+  fill_radii(out.radius_a, in.abs_wa, in.half_a, in.pad, in.depth_a);
+  fill_radii(out.radius_b, in.abs_wb, in.half_b, in.pad, in.depth_b);
+}
+
+using Builder = void (*)(const TableInput&, LaneTables&);
+void build_tables_portable(const TableInput& in, LaneTables& out) { build_tables(in, out); }
+#ifdef OCTBAKE_X86_KERNELS
+[[gnu::target("avx2")]] void build_tables_avx2(const TableInput& in, LaneTables& out) { build_tables(in, out); }
+[[gnu::target("avx512f")]] void build_tables_avx512(const TableInput& in, LaneTables& out) { build_tables(in, out); }
+#endif
+
+std::atomic<BoxKernel> chosen_kernel{BoxKernel::best};
+
+bool cpu_has(BoxKernel k) {
+  switch (k) {
+    case BoxKernel::best:
+    case BoxKernel::portable:
+      return true;
+#ifdef OCTBAKE_X86_KERNELS
+    case BoxKernel::avx2:
+      return __builtin_cpu_supports("avx2");
+    case BoxKernel::avx512:
+      return __builtin_cpu_supports("avx512f");
+#else
+    default:
+      return false;
+#endif
+  }
+  return false;
+}
+
+struct Isa {
+  Kernel kernel;
+  Builder build;
+};
+
+Isa isa_of(BoxKernel k) {
+#ifdef OCTBAKE_X86_KERNELS
+  if (k == BoxKernel::avx512) return {children_overlap_avx512, build_tables_avx512};
+  if (k == BoxKernel::avx2) return {children_overlap_avx2, build_tables_avx2};
+#endif
+  (void)k;
+  return {children_overlap_portable, build_tables_portable};
+}
+
+Isa pick_isa() {
+  static const BoxKernel best = cpu_has(BoxKernel::avx512) ? BoxKernel::avx512
+                                : cpu_has(BoxKernel::avx2) ? BoxKernel::avx2
+                                                           : BoxKernel::portable;
+  const BoxKernel k = chosen_kernel.load(std::memory_order_relaxed);
+  return isa_of(k == BoxKernel::best ? best : k);
 }
 
 // ---- The pair frame --------------------------------------------------------
@@ -178,140 +324,118 @@ Kernel pick_kernel() {
 // the 16-lane radii and the 8 child offsets of the projections.
 class PairFrame {
  public:
-  PairFrame(const PlacedTree& a, const PlacedTree& b) : rel_(a, b), depth_a_(a.depth), depth_b_(b.depth) {
+  PairFrame(const PlacedTree& a, const PlacedTree& b, const Isa& isa)
+      : rel_(a, b), depth_a_(a.depth), depth_b_(b.depth), kernel_(isa.kernel) {
     const Eigen::Matrix3d& r = rel_.r;
     const Eigen::Matrix3d& ar = rel_.abs_r;
-    // w_[m][k]: weight of t_m in projection k; radius weights of A's and B's
-    // half extents (Gottschalk's formulas, with |R| padded).
-    for (auto* table : {&w_, &abs_wa_, &abs_wb_})
-      for (auto& row : *table) std::fill(std::begin(row), std::end(row), 0.0);
-    for (int i = 0; i < 3; ++i) {
-      w_[i][i] = 1;
-      abs_wa_[i][i] = 1;
-      for (int j = 0; j < 3; ++j) {
-        w_[i][3 + j] = r(i, j);
-        abs_wa_[i][3 + j] = ar(i, j);
-        abs_wb_[j][i] = ar(i, j);
+    // w[m][k]: weight of t_m in projection k; abs_w*: weights of A's and B's
+    // half extents in the radii (Gottschalk's formulas, with |R| padded).
+    // Every entry is written once (no zero fill: this runs per pair).
+    TableInput& in = in_;
+    for (int i = 0; i < 3; ++i)
+      for (int m = 0; m < 3; ++m) {
+        in.w[m][i] = in.abs_wa[m][i] = m == i ? 1 : 0;  // A's face i
+        in.w[m][3 + i] = r(m, i);                       // B's face i
+        in.abs_wa[m][3 + i] = ar(m, i);
+        in.abs_wb[m][i] = ar(i, m);
+        in.abs_wb[m][3 + i] = m == i ? 1 : 0;
       }
-      abs_wb_[i][3 + i] = 1;
+    for (int i = 0; i < 3; ++i) {  // edge pairs A_i x B_j
       const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
       for (int j = 0; j < 3; ++j) {
         const int k = 6 + 3 * i + j, j1 = (j + 1) % 3, j2 = (j + 2) % 3;
-        w_[i2][k] = r(i1, j);
-        w_[i1][k] = -r(i2, j);
-        abs_wa_[i1][k] = ar(i2, j);
-        abs_wa_[i2][k] = ar(i1, j);
-        abs_wb_[j1][k] = ar(i, j2);
-        abs_wb_[j2][k] = ar(i, j1);
+        in.w[i][k] = 0;
+        in.w[i2][k] = r(i1, j);
+        in.w[i1][k] = -r(i2, j);
+        in.abs_wa[i][k] = 0;
+        in.abs_wa[i1][k] = ar(i2, j);
+        in.abs_wa[i2][k] = ar(i1, j);
+        in.abs_wb[j][k] = 0;
+        in.abs_wb[j1][k] = ar(i, j2);
+        in.abs_wb[j2][k] = ar(i, j1);
       }
     }
-    // B's local axis j moves its centre by sR e_j in A's frame.
-    for (int j = 0; j < 3; ++j)
-      for (int k = 0; k < kLanes; ++k)
-        wb_[j][k] = (w_[0][k] * rel_.sr(0, j) + w_[1][k] * rel_.sr(1, j)) + w_[2][k] * rel_.sr(2, j);
-
+    for (int m = 0; m < 3; ++m) in.w[m][15] = in.abs_wa[m][15] = in.abs_wb[m][15] = 0;  // the idle lane
     const Aabb& ba = a.tree->bounds();
     const Aabb& bb = b.tree->bounds();
     a_min_ = ba.min;
     b_min_ = bb.min;
-    for (int d = 0; d <= a.depth; ++d) {
-      a_size_[d] = (ba.max - ba.min) / double(1u << d);
-      size_a_[d] = (0.5 * a_size_[d]).squaredNorm();
+    a_size_ = ba.max - ba.min;
+    b_size_ = bb.max - bb.min;
+    size_a_ = (0.5 * a_size_).squaredNorm();
+    size_b_ = (0.5 * rel_.s * b_size_).squaredNorm();
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) in.sr[i][j] = rel_.sr(i, j);
+      in.quarter_a[i] = 0.25 * a_size_[i];
+      in.quarter_b[i] = 0.25 * b_size_[i];
+      in.half_a[i] = 0.5 * a_size_[i];
+      in.half_b[i] = 0.5 * rel_.s * b_size_[i];
     }
-    for (int d = 0; d <= b.depth; ++d) {
-      b_size_[d] = (bb.max - bb.min) / double(1u << d);
-      size_b_[d] = (0.5 * rel_.s * b_size_[d]).squaredNorm();
-    }
-    ready_a_.fill(false);
-    ready_b_.fill(false);
+    in.pad = rel_.pad;
+    in.depth_a = a.depth;
+    in.depth_b = b.depth;
+    isa.build(in, t_);
   }
 
-  // Split A rather than B at depths (da, db)? The larger box splits.
+  // Split A rather than B at depths (da, db)? The larger box splits (half
+  // diagonals in A's units, both halving with each depth).
   bool split_a(int da, int db) const {
     if (da == depth_a_) return false;
     if (db == depth_b_) return true;
-    return size_a_[da] >= size_b_[db];
+    return size_a_ * kHalfPow[2 * da] >= size_b_ * kHalfPow[2 * db];  // both exact
   }
 
   // Projections of box pair (A's ca at da, B's cb at db).
   void project(const Coord& ca, int da, const Coord& cb, int db, Lanes& p) const {
-    const Eigen::Vector3d qa = a_min_ + a_size_[da].cwiseProduct(cell_center(ca));
-    const Eigen::Vector3d qb = b_min_ + b_size_[db].cwiseProduct(cell_center(cb));
+    const Eigen::Vector3d qa = a_min_ + kHalfPow[da] * a_size_.cwiseProduct(cell_center(ca));
+    const Eigen::Vector3d qb = b_min_ + kHalfPow[db] * b_size_.cwiseProduct(cell_center(cb));
     const Eigen::Vector3d t = (rel_.t + rel_.sr * qb) - qa;
-    for (int k = 0; k < kLanes; ++k) p[k] = (w_[0][k] * t[0] + w_[1][k] * t[1]) + w_[2][k] * t[2];
+    const Lanes* w = in_.w;
+    for (int k = 0; k < kLanes; ++k) p[k] = (w[0][k] * t[0] + w[1][k] * t[1]) + w[2][k] * t[2];
   }
 
-  bool overlap(const Lanes& p, int da, int db) {
-    const double* ra = radius_a(da);
-    const double* rb = radius_b(db);
+  bool overlap(const double* p, int da, int db) const {
     bool separated = false;
-    for (int k = 0; k < kLanes; ++k) separated |= std::abs(p[k]) > ra[k] + rb[k];
+    for (int k = 0; k < kLanes; ++k) separated |= std::abs(p[k]) > t_.radius_a[da][k] + t_.radius_b[db][k];
     return !separated;
   }
 
-  const double* radius_a(int d) { return level_a(d).radius; }
-  const double* radius_b(int d) { return level_b(d).radius; }
-  // Offsets of the 8 children at depth d >= 1 (octant order).
-  const Lanes* offsets_a(int d) { return level_a(d).offset; }
-  const Lanes* offsets_b(int d) { return level_b(d).offset; }
+  // Does the padded box of one side lie inside the other's, with a margin of
+  // one pad for rounding? Then every leaf under the inner box overlaps the
+  // outer box. Checked on the outer box's face axes (lanes 0..2 for A, 3..5
+  // for B), where the inner box's radius bounds its extent (|R| padded).
+  bool b_inside_a(const double* p, int da, int db) const { return inside(p, t_.radius_b[db], t_.radius_a[da], 0); }
+  bool a_inside_b(const double* p, int da, int db) const { return inside(p, t_.radius_a[da], t_.radius_b[db], 3); }
+
+  // Test the children of A's box (split_a) or B's box at depth d against the
+  // other box at its depth `other`: see children_overlap.
+  uint32_t children_overlap(bool split_a, int d, int other, const double* parent, const uint8_t* octant, int n,
+                            Lanes* out) const {
+    const double scale = kHalfPow[d];  // children at depth d + 1
+    return split_a ? kernel_(parent, t_.radius_a[d + 1], t_.radius_b[other], t_.offset_a, scale, octant, n, out)
+                   : kernel_(parent, t_.radius_a[other], t_.radius_b[d + 1], t_.offset_b, scale, octant, n, out);
+  }
 
  private:
-  struct Level {
-    Lanes radius;
-    Lanes offset[8];
-  };
-
-  // A child at depth d sits at its parent's centre +- half its own size on
-  // each axis of its tree; q is that half size, weights its effect on p.
-  static void fill_offsets(Level& level, const Lanes (&weights)[3], const Eigen::Vector3d& q, double sign) {
-    Lanes e[3];
-    for (int m = 0; m < 3; ++m)
-      for (int k = 0; k < kLanes; ++k) e[m][k] = sign * weights[m][k] * q[m];
-    for (int oct = 0; oct < 8; ++oct)
-      for (int k = 0; k < kLanes; ++k)
-        level.offset[oct][k] = ((oct & 1 ? e[0][k] : -e[0][k]) + (oct & 2 ? e[1][k] : -e[1][k])) +
-                               (oct & 4 ? e[2][k] : -e[2][k]);
-  }
-
-  static void fill_radius(Level& level, const Lanes (&weights)[3], const Eigen::Vector3d& half) {
-    for (int k = 0; k < kLanes; ++k)
-      level.radius[k] = (weights[0][k] * half[0] + weights[1][k] * half[1]) + weights[2][k] * half[2];
-  }
-
-  const Level& level_a(int d) {
-    assert(d <= depth_a_);
-    if (!ready_a_[d]) {
-      fill_radius(levels_a_[d], abs_wa_, ((0.5 * a_size_[d]).array() + rel_.pad).matrix());
-      // t = centre B - centre A: A's child moving by +q moves t by -q.
-      if (d > 0) fill_offsets(levels_a_[d], w_, 0.5 * a_size_[d], -1.0);
-      ready_a_[d] = true;
-    }
-    return levels_a_[d];
-  }
-
-  const Level& level_b(int d) {
-    assert(d <= depth_b_);
-    if (!ready_b_[d]) {
-      fill_radius(levels_b_[d], abs_wb_, ((0.5 * rel_.s * b_size_[d]).array() + rel_.pad).matrix());
-      if (d > 0) fill_offsets(levels_b_[d], wb_, 0.5 * b_size_[d], 1.0);
-      ready_b_[d] = true;
-    }
-    return levels_b_[d];
+  bool inside(const double* p, const double* inner, const double* outer, int lane) const {
+    bool in = true;
+    for (int k = lane; k < lane + 3; ++k) in &= (std::abs(p[k]) + inner[k]) + rel_.pad <= outer[k];
+    return in;
   }
 
   Relative rel_;
   int depth_a_, depth_b_;
-  Lanes w_[3], wb_[3], abs_wa_[3], abs_wb_[3];
-  Eigen::Vector3d a_min_, b_min_;
-  std::array<Eigen::Vector3d, kMaxDepth + 1> a_size_, b_size_;
-  std::array<double, kMaxDepth + 1> size_a_{}, size_b_{};
-  std::array<bool, kMaxDepth + 1> ready_a_, ready_b_;
-  std::array<Level, kMaxDepth + 1> levels_a_, levels_b_;
+  Kernel kernel_;
+  TableInput in_;  // kept for its projection weights w
+  Eigen::Vector3d a_min_, b_min_, a_size_, b_size_;  // root sizes
+  double size_a_, size_b_;                          // squared root half diagonals, A's units
+  LaneTables t_;
 };
 
-// A box pair known to overlap, waiting on the descent stack.
+// A box pair known to overlap, waiting on the descent stack. Its projections
+// live in the pool block of its parent's path level (see descend).
 struct Entry {
-  alignas(32) Lanes p;
+  const double* p;
   uint32_t ia, ib;  // level indices
   Coord ca, cb;
   uint8_t da, db;
@@ -320,49 +444,84 @@ struct Entry {
 // DFS stack bound: an expansion pushes <= 8 pairs and a path has at most
 // da + db <= 2 * kMaxDepth expansions, each leaving its pushes on the stack.
 constexpr size_t kStackSize = 8 * 2 * kMaxDepth + 1;
+constexpr int kPathLevels = 2 * kMaxDepth;
 
-// Depth-first descent of an overlapping root pair (canonical order);
-// on_leaf(entry) returns true to stop.
-template <class OnLeaf>
-void descend(PairFrame& frame, const PlacedTree& a, const PlacedTree& b, PairTest& result, OnLeaf on_leaf) {
-  const Kernel kernel = pick_kernel();
+// The occupied octants of every child mask, in order.
+struct OctantTable {
+  uint8_t count[256];
+  uint8_t octant[256][8];
+  constexpr OctantTable() : count{}, octant{} {
+    for (int m = 0; m < 256; ++m)
+      for (int j = 0; j < 8; ++j)
+        if (m & (1 << j)) octant[m][count[m]++] = uint8_t(j);
+  }
+};
+constexpr OctantTable kOctants;
+
+// Some occupied leaf (at `depth`) under box (d, index, c), lowest octants
+// first; false if the box has none.
+bool some_leaf(const ObjectTree& tree, int depth, int d, uint32_t index, const Coord& c, Coord& leaf) {
+  if (d == depth) return leaf = c, true;
+  const uint8_t mask = tree.mask(d, index);
+  const uint32_t first = tree.first_child(d, index);
+  for (int k = 0; k < kOctants.count[mask]; ++k) {
+    const uint8_t j = kOctants.octant[mask][k];
+    const Coord child{uint16_t(2 * c[0] + (j & 1u)), uint16_t(2 * c[1] + ((j >> 1) & 1u)),
+                      uint16_t(2 * c[2] + ((j >> 2) & 1u))};
+    if (some_leaf(tree, depth, d + 1, first + uint32_t(k), child, leaf)) return true;
+  }
+  return false;
+}
+
+// Depth-first descent in canonical order, calling on_leaf(a's leaf, b's
+// leaf) for each overlapping leaf pair: only the first if kFirstOnly.
+template <bool kFirstOnly, class OnLeaf>
+void descend(const PairFrame& frame, const PlacedTree& a, const PlacedTree& b, PairTest& result, OnLeaf on_leaf) {
+  // The children of a pair at path level L = da + db write their projections
+  // to pool[L]: depth first, every pair of level L + 1 waiting on the stack
+  // was made by the one expansion at level L still open, so nothing there is
+  // overwritten before it is used. No copies.
+  alignas(64) Lanes pool[kPathLevels][8];
+  alignas(64) Lanes root_p;
   std::array<Entry, kStackSize> stack;
   size_t n = 0;
-  {
-    Entry& root = stack[n];
-    root.ia = root.ib = 0;
-    root.ca = root.cb = {0, 0, 0};
-    root.da = root.db = 0;
-    frame.project(root.ca, 0, root.cb, 0, root.p);
-    ++result.box_tests;
-    if (!frame.overlap(root.p, 0, 0)) return;
-    ++n;
-  }
-  alignas(32) Lanes out[8];
+  frame.project({0, 0, 0}, 0, {0, 0, 0}, 0, root_p);
+  ++result.box_tests;
+  if (!frame.overlap(root_p, 0, 0)) return;
+  stack[n++] = Entry{root_p, 0, 0, {0, 0, 0}, {0, 0, 0}, 0, 0};
   while (n > 0) {
-    const Entry& e = stack[--n];
+    // Field by field: a block copy would reload the pushed fields in wider
+    // loads than they were stored with (a store-forwarding stall).
+    const Entry& top = stack[--n];
+    const Entry e{top.p, top.ia, top.ib, top.ca, top.cb, top.da, top.db};
     const bool split_a = frame.split_a(e.da, e.db);
     if (!split_a && e.db == b.depth) {  // neither can split: a leaf pair
       result.hit = true;
-      if (on_leaf(e)) return;
+      on_leaf(e.ca, e.cb);
+      if (kFirstOnly) return;
       continue;
     }
-    // Copy what the pushes below would overwrite.
-    const uint32_t ia = e.ia, ib = e.ib;
-    const Coord ca = e.ca, cb = e.cb;
-    const int da = e.da, db = e.db;
     const ObjectTree& tree = split_a ? *a.tree : *b.tree;
-    const int d = split_a ? da : db;
-    const uint32_t index = split_a ? ia : ib;
+    const int d = split_a ? e.da : e.db;
+    const uint32_t index = split_a ? e.ia : e.ib;
+    // The other box is a leaf and holds this one whole: any leaf below is a
+    // proof (counted as the one box test it replaces).
+    if (kFirstOnly && (split_a ? e.db == b.depth && frame.a_inside_b(e.p, e.da, e.db)
+                               : e.da == a.depth && frame.b_inside_a(e.p, e.da, e.db))) {
+      Coord leaf;
+      if (some_leaf(tree, split_a ? a.depth : b.depth, d, index, split_a ? e.ca : e.cb, leaf)) {
+        ++result.box_tests;
+        result.hit = true;
+        split_a ? on_leaf(leaf, e.cb) : on_leaf(e.ca, leaf);
+        return;
+      }
+    }
     const uint8_t mask = tree.mask(d, index);
     const uint32_t first = tree.first_child(d, index);
-    uint8_t octant[8];
-    int count = 0;
-    for (uint8_t j = 0; j < 8; ++j)
-      if (mask & (1u << j)) octant[count++] = j;
-    const uint32_t hits =
-        split_a ? kernel(e.p, frame.radius_a(d + 1), frame.radius_b(db), frame.offsets_a(d + 1), octant, count, out)
-                : kernel(e.p, frame.radius_a(da), frame.radius_b(d + 1), frame.offsets_b(d + 1), octant, count, out);
+    const int count = kOctants.count[mask];
+    const uint8_t* octant = kOctants.octant[mask];
+    Lanes* out = pool[e.da + e.db];
+    const uint32_t hits = frame.children_overlap(split_a, d, split_a ? e.db : e.da, e.p, octant, count, out);
     result.box_tests += uint64_t(count);
     if (hits == 0) continue;
     // Nearest first: sort the overlapping children by centre distance
@@ -379,20 +538,14 @@ void descend(PairFrame& frame, const PlacedTree& a, const PlacedTree& b, PairTes
     }
     assert(n + size_t(m) <= kStackSize);
     // Pushed farthest first so that the nearest is popped next.
+    const Coord& grown = split_a ? e.ca : e.cb;
     for (int s = m - 1; s >= 0; --s) {
       const int c = order[s];
       const uint8_t j = octant[c];
-      Entry& child = stack[n++];
-      std::memcpy(child.p, out[c], sizeof(Lanes));
-      const Coord grown = split_a ? ca : cb;
       const Coord coord{uint16_t(2 * grown[0] + (j & 1u)), uint16_t(2 * grown[1] + ((j >> 1) & 1u)),
                         uint16_t(2 * grown[2] + ((j >> 2) & 1u))};
-      child.ia = split_a ? first + uint32_t(c) : ia;
-      child.ib = split_a ? ib : first + uint32_t(c);
-      child.ca = split_a ? coord : ca;
-      child.cb = split_a ? cb : coord;
-      child.da = uint8_t(split_a ? da + 1 : da);
-      child.db = uint8_t(split_a ? db : db + 1);
+      stack[n++] = split_a ? Entry{out[c], first + uint32_t(c), e.ib, coord, e.cb, uint8_t(e.da + 1), e.db}
+                           : Entry{out[c], e.ia, first + uint32_t(c), e.ca, coord, e.da, uint8_t(e.db + 1)};
     }
   }
 }
@@ -414,7 +567,7 @@ PairTest collide_with_hint(const PlacedTree& a, const PlacedTree& b, const LeafP
   check(a);
   check(b);
   const Canonical pair(a, b);
-  PairFrame frame(pair.first, pair.second);
+  const PairFrame frame(pair.first, pair.second, pick_isa());
   PairTest result;
   if (hint) {
     const Coord c1 = from_coord(pair.swapped ? hint->b : hint->a), c2 = from_coord(pair.swapped ? hint->a : hint->b);
@@ -427,16 +580,18 @@ PairTest collide_with_hint(const PlacedTree& a, const PlacedTree& b, const LeafP
       return result;
     }
   }
-  descend(frame, pair.first, pair.second, result, [&](const Entry& e) {
-    result.leaf = pair.to_caller(e.ca, e.cb);
-    return true;
-  });
+  descend<true>(frame, pair.first, pair.second, result,
+                [&](const Coord& ca, const Coord& cb) { result.leaf = pair.to_caller(ca, cb); });
   return result;
 }
 
 }  // namespace
 
-void use_portable_box_kernel(bool on) { force_portable.store(on, std::memory_order_relaxed); }
+bool use_box_kernel(BoxKernel kernel) {
+  if (!cpu_has(kernel)) return false;
+  chosen_kernel.store(kernel, std::memory_order_relaxed);
+  return true;
+}
 
 PairTest collide(const PlacedTree& a, const PlacedTree& b) { return collide_with_hint(a, b, nullptr); }
 
@@ -457,12 +612,10 @@ PairTest collide_all(const PlacedTree& a, const PlacedTree& b, std::vector<LeafP
   check(a);
   check(b);
   const Canonical pair(a, b);
-  PairFrame frame(pair.first, pair.second);
+  const PairFrame frame(pair.first, pair.second, pick_isa());
   PairTest result;
-  descend(frame, pair.first, pair.second, result, [&](const Entry& e) {
-    out.push_back(pair.to_caller(e.ca, e.cb));
-    return false;
-  });
+  descend<false>(frame, pair.first, pair.second, result,
+                 [&](const Coord& ca, const Coord& cb) { out.push_back(pair.to_caller(ca, cb)); });
   return result;
 }
 

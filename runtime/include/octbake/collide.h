@@ -18,9 +18,8 @@
 // each of the 15 axes is its parent's plus a signed sum of three terms,
 // precomputed per depth for the pair. A box pair carries its 15 projections
 // (16 lanes, one idle); testing a child is 16 additions, absolute values and
-// comparisons against precomputed radii (double precision, GCC/Clang vector
-// code built for AVX2 when the CPU has it, otherwise for the baseline ISA;
-// both give bit-identical results, no fused multiply-add).
+// comparisons against precomputed radii (double precision; AVX-512 or AVX2
+// where the CPU has them, plain C++ otherwise; all give identical bits).
 //
 // Why it is conservative. If the meshes touch at a point x, x lies in an
 // occupied leaf box of each tree (the occupancy is conservative) and so in
@@ -109,8 +108,10 @@ PairTest collide_all(const PlacedTree& a, const PlacedTree& b, std::vector<LeafP
 PairTest collide_reference(const PlacedTree& a, const PlacedTree& b);
 PairTest collide_all_reference(const PlacedTree& a, const PlacedTree& b, std::vector<LeafPair>& out);
 
-// Tests only: run the box-test kernel built for the baseline ISA even where
-// the CPU has AVX2 (both builds must agree bit for bit). Process-wide.
-void use_portable_box_kernel(bool on);
+// Tests and benchmarks only: which build of the box-test kernel collide() and
+// collide_all() run, process-wide (best: the widest the CPU has). All builds
+// give identical bits. Returns false, changing nothing, if the CPU lacks it.
+enum class BoxKernel { best, portable, avx2, avx512 };
+bool use_box_kernel(BoxKernel kernel);
 
 }  // namespace octbake
