@@ -216,52 +216,62 @@ struct LaneTables {
   alignas(64) Lanes radius_a[kMaxDepth + 1], radius_b[kMaxDepth + 1];
 };
 
+// Written per chunk of 4 lanes with GCC/Clang vector types, loaded and stored
+// through pointers only: the compiler then emits one vector operation per
+// chunk for whatever ISA the caller is built for (left to the
+// auto-vectoriser, these loops came out as shuffles).
+using v4d = double __attribute__((vector_size(32)));
+using v4d_mem = double __attribute__((vector_size(32), aligned(8), may_alias));
+[[gnu::always_inline]] inline void load4(v4d& v, const double* p) { v = *reinterpret_cast<const v4d_mem*>(p); }
+[[gnu::always_inline]] inline void store4(double* p, const v4d& v) { *reinterpret_cast<v4d_mem*>(p) = v; }
+
 // A child at depth 1 sits at the root's centre +- q on each axis m of its
-// tree; weights[m] give the effect on the projections. Octants 7 - j are the
-// negations of octants j (negation is exact).
+// tree; weights[m] give the effect on the projections (times sign). Octants
+// 7 - j are the negations of octants j (negation is exact).
 [[gnu::always_inline]] inline void fill_offsets(Lanes* offset, const Lanes* weights, const double* q, double sign) {
-  Lanes e[3];
-#pragma GCC unroll 1
-  for (int m = 0; m < 3; ++m) {
-    const double f = sign * q[m];
-    for (int k = 0; k < kLanes; ++k) e[m][k] = weights[m][k] * f;
+  const double f0 = sign * q[0], f1 = sign * q[1], f2 = sign * q[2];
+  for (int c = 0; c < kLanes; c += 4) {
+    v4d w0, w1, w2;
+    load4(w0, weights[0] + c);
+    load4(w1, weights[1] + c);
+    load4(w2, weights[2] + c);
+    const v4d e0 = w0 * f0, e1 = w1 * f1, e2 = w2 * f2;
+    const v4d s01 = e0 + e1, d01 = e0 - e1;  // +x+y, +x-y
+    const v4d o0 = -(s01 + e2), o1 = d01 - e2, o2 = -(d01 + e2), o3 = s01 - e2;
+    store4(offset[0] + c, o0);  // -x-y-z
+    store4(offset[1] + c, o1);  // +x-y-z
+    store4(offset[2] + c, o2);  // -x+y-z
+    store4(offset[3] + c, o3);  // +x+y-z
+    store4(offset[7] + c, -o0);
+    store4(offset[6] + c, -o1);
+    store4(offset[5] + c, -o2);
+    store4(offset[4] + c, -o3);
   }
-  Lanes s01, d01;  // +x+y, +x-y
-  for (int k = 0; k < kLanes; ++k) s01[k] = e[0][k] + e[1][k];
-  for (int k = 0; k < kLanes; ++k) d01[k] = e[0][k] - e[1][k];
-  for (int k = 0; k < kLanes; ++k) offset[0][k] = -(s01[k] + e[2][k]);  // -x-y-z
-  for (int k = 0; k < kLanes; ++k) offset[1][k] = d01[k] - e[2][k];     // +x-y-z
-  for (int k = 0; k < kLanes; ++k) offset[2][k] = -(d01[k] + e[2][k]);  // -x+y-z
-  for (int k = 0; k < kLanes; ++k) offset[3][k] = s01[k] - e[2][k];     // +x+y-z
-#pragma GCC unroll 1
-  for (int j = 0; j < 4; ++j)
-    for (int k = 0; k < kLanes; ++k) offset[7 - j][k] = -offset[j][k];
 }
 
 // Radius of the padded box at each depth: weights . (half / 2^d + pad).
 [[gnu::always_inline]] inline void fill_radii(Lanes* radius, const Lanes* weights, const double* half, double pad,
                                               int depth) {
-  Lanes base, padding;
-  for (int k = 0; k < kLanes; ++k) {
-    base[k] = (weights[0][k] * half[0] + weights[1][k] * half[1]) + weights[2][k] * half[2];
-    padding[k] = ((weights[0][k] + weights[1][k]) + weights[2][k]) * pad;
-  }
-#pragma GCC unroll 1
-  for (int d = 0; d <= depth; ++d) {
-    const double scale = kHalfPow[d];
-    for (int k = 0; k < kLanes; ++k) radius[d][k] = base[k] * scale + padding[k];
+  for (int c = 0; c < kLanes; c += 4) {
+    v4d w0, w1, w2;
+    load4(w0, weights[0] + c);
+    load4(w1, weights[1] + c);
+    load4(w2, weights[2] + c);
+    const v4d base = (w0 * half[0] + w1 * half[1]) + w2 * half[2];
+    const v4d padding = ((w0 + w1) + w2) * pad;
+    for (int d = 0; d <= depth; ++d) store4(radius[d] + c, base * kHalfPow[d] + padding);
   }
 }
 
 [[gnu::always_inline]] inline void build_tables(const TableInput& in, LaneTables& out) {
   // B's local axis j moves its centre by sR e_j in A's frame.
-  // (Loops over lanes innermost and kept rolled outside: GCC then vectorises
-  // across the lanes.)
   Lanes wb[3];
-#pragma GCC unroll 1
-  for (int j = 0; j < 3; ++j) {
-    const double s0 = in.sr[0][j], s1 = in.sr[1][j], s2 = in.sr[2][j];
-    for (int k = 0; k < kLanes; ++k) wb[j][k] = (in.w[0][k] * s0 + in.w[1][k] * s1) + in.w[2][k] * s2;
+  for (int c = 0; c < kLanes; c += 4) {
+    v4d w0, w1, w2;
+    load4(w0, in.w[0] + c);
+    load4(w1, in.w[1] + c);
+    load4(w2, in.w[2] + c);
+    for (int j = 0; j < 3; ++j) store4(wb[j] + c, (w0 * in.sr[0][j] + w1 * in.sr[1][j]) + w2 * in.sr[2][j]);
   }
   // t = centre B - centre A: A's child moving by +q moves t by -q.
   fill_offsets(out.offset_a, in.w, in.quarter_a, -1.0);
@@ -555,8 +565,9 @@ struct Canonical {
   const PlacedTree& first;
   const PlacedTree& second;
   bool swapped;
-  Canonical(const PlacedTree& a, const PlacedTree& b)
-      : first(goes_first(a, b) ? a : b), second(goes_first(a, b) ? b : a), swapped(!goes_first(a, b)) {}
+  Canonical(const PlacedTree& a, const PlacedTree& b) : Canonical(a, b, !goes_first(a, b)) {}
+  Canonical(const PlacedTree& a, const PlacedTree& b, bool swap)
+      : first(swap ? b : a), second(swap ? a : b), swapped(swap) {}
   LeafPair to_caller(const Coord& c1, const Coord& c2) const {
     return swapped ? LeafPair{to_coord(c2), to_coord(c1)} : LeafPair{to_coord(c1), to_coord(c2)};
   }
