@@ -12,6 +12,12 @@
 // first overlapping leaf pair ends the descent (early out): that pair proves
 // the hit and is reported. So a small object against a large one walks down
 // the large tree first, and the pairs most likely to touch are tried first.
+// One more early out: when the other box is already a leaf and holds the box
+// about to split whole (with a margin of one pad), any occupied leaf below
+// overlaps it, so the first one found (lowest octants first) proves the hit.
+// box_tests counts each child box tested, the root pair, a cached pair
+// (PairCache) and a containment proof (one each); a containment check that
+// fails reuses the pair's projections and is not counted.
 //
 // Box tests at memory speed. The 8 children of a box share its axes and sit at
 // its centre plus or minus a quarter of its size, so a child's projection on
@@ -26,7 +32,8 @@
 // every ancestor of both leaves. Every box pair on the path of ancestors
 // therefore overlaps, and the descent tests every child of every overlapping
 // pair it splits, so it reaches an overlapping leaf pair (perhaps another one
-// first). Ordering only changes which hit is found first, never whether.
+// first). Ordering only changes which hit is found first, never whether; the
+// containment early out stops only where a leaf pair is known to overlap.
 // Rounding cannot turn an overlap into a separation: every box half extent
 // grows by 1e-9 times the pair's coordinate magnitude M in A's frame (largest
 // |local coordinate| of each root, B's scaled by sb/sa, plus the offset
