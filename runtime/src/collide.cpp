@@ -12,7 +12,6 @@
 #include <cassert>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <functional>
 
 #if defined(__x86_64__)
@@ -119,10 +118,11 @@ bool occupied(const ObjectTree& tree, int depth, const BoxCoord& c) {
 // children_overlap(parent, ra, rb, offset, scale, octant, n, out): the
 // children `octant[0..n)` of the split box against the other box. Child c's
 // projections are parent + scale * offset[octant[c]] (scale a power of two,
-// so the product is exact), written to out[c]; bit c of the
-// result is set iff child c overlaps (radii ra + rb lane by lane). Three
-// builds: plain C++, AVX2 and AVX-512. Each lane is one addition, one absolute
-// value and one ordered comparison, so all three give identical bits.
+// so the product is exact), written to out[c]; bit c of the result is set
+// iff child c overlaps (radii ra + rb lane by lane). Three builds: plain C++,
+// AVX2 and AVX-512. Each lane is one multiplication, one addition, one
+// absolute value and one ordered comparison (no fused multiply-add), so all
+// three give identical bits.
 constexpr int kLanes = 16;
 using Lanes = double[kLanes];
 
