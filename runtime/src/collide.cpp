@@ -1,12 +1,22 @@
-// Simultaneous descent of two posed ObjectTrees with an oriented-box
-// separating axis test (Gottschalk, Lin, Manocha: "OBBTree", SIGGRAPH 1996).
+// Pair tests of two posed ObjectTrees: oriented-box separating axis tests
+// (Gottschalk, Lin, Manocha: "OBBTree", SIGGRAPH 1996) in a descent that
+// splits the larger box and visits the nearest children first, with the 15
+// axis projections of a box pair carried down and updated incrementally.
+// The plain reference descent lives at the end of this file.
 #include "octbake/collide.h"
 
 #include <algorithm>
 #include <array>
+#include <atomic>
+#include <bit>
 #include <cassert>
 #include <cmath>
+#include <cstdint>
 #include <functional>
+
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
 
 namespace octbake {
 namespace {
@@ -20,113 +30,20 @@ constexpr double kRelPad = 1e-9;
 // Added to |R| (Gottschalk's guard): near-parallel edge pairs give near-zero
 // cross axes on which both sides of the SAT inequality are pure rounding.
 constexpr double kAxisPad = 1e-9;
-// DFS stack bound: an expansion pushes <= 64 pairs when both trees descend and
-// <= 8 when one does; a path holds at most min(da, db) of the first kind and
-// |da - db| of the second, each leaving its pushes on the stack.
-constexpr size_t kStackSize = 64 * kMaxDepth;
 
-// A box pair on the descent stack: level indices, integer coordinates, depths.
-struct Entry {
-  uint32_t ia, ib;
-  std::array<uint16_t, 3> ca, cb;
-  uint8_t da, db;
-};
+using Coord = std::array<uint16_t, 3>;
 
-struct Child {
-  uint32_t index;
-  std::array<uint16_t, 3> coord;
-};
+// 2^-d for every depth (a table: std::ldexp is a library call).
+constexpr std::array<double, 2 * kMaxDepth + 1> kHalfPow = [] {
+  std::array<double, 2 * kMaxDepth + 1> h{};
+  double v = 1;
+  for (double& x : h) x = v, v *= 0.5;
+  return h;
+}();
 
-// Occupied children of box (d, i, c), in octant order.
-int children(const ObjectTree& tree, int d, uint32_t i, const std::array<uint16_t, 3>& c, Child* out) {
-  const uint8_t mask = tree.mask(d, i);
-  uint32_t next = tree.first_child(d, i);
-  int n = 0;
-  for (uint32_t j = 0; j < 8; ++j) {
-    if (!(mask & (1u << j))) continue;
-    out[n++] = {next++,
-                {uint16_t(2 * c[0] + (j & 1u)), uint16_t(2 * c[1] + ((j >> 1) & 1u)),
-                 uint16_t(2 * c[2] + ((j >> 2) & 1u))}};
-  }
-  return n;
-}
-
-Eigen::Vector3d cell_center(const std::array<uint16_t, 3>& c) { return {c[0] + 0.5, c[1] + 0.5, c[2] + 0.5}; }
-
-// B's boxes in A's local (unscaled) frame: q_A = t + s R q_B, with per-depth
-// radii precomputed so that a box test is two centres and 15 comparisons.
-class PairFrame {
- public:
-  PairFrame(const PlacedTree& a, const PlacedTree& b) {
-    const Eigen::Matrix3d ra = a.pose.rotation.toRotationMatrix();
-    const Eigen::Matrix3d rb = b.pose.rotation.toRotationMatrix();
-    const double s = b.pose.scale / a.pose.scale;
-    // Subtract first: equal world offsets (1e7) cancel before any product.
-    const Eigen::Vector3d dp = b.pose.position - a.pose.position;
-    r_ = ra.transpose() * rb;
-    sr_ = s * r_;
-    t_ = ra.transpose() * dp / a.pose.scale;
-    const Eigen::Matrix3d abs_r = r_.cwiseAbs().array() + kAxisPad;
-
-    const Aabb& ba = a.tree->bounds();
-    const Aabb& bb = b.tree->bounds();
-    const double mag_a = std::max(ba.min.cwiseAbs().maxCoeff(), ba.max.cwiseAbs().maxCoeff());
-    const double mag_b = std::max(bb.min.cwiseAbs().maxCoeff(), bb.max.cwiseAbs().maxCoeff());
-    const double pad = kRelPad * (mag_a + s * mag_b + t_.cwiseAbs().maxCoeff());
-    a_min_ = ba.min;
-    b_min_ = bb.min;
-    for (int d = 0; d <= a.depth; ++d) {
-      a_size_[d] = (ba.max - ba.min) / double(1u << d);
-      a_half_[d] = (0.5 * a_size_[d]).array() + pad;
-      rad_a_[d] = abs_r.transpose() * a_half_[d];
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j)
-          cross_a_[d][3 * i + j] = a_half_[d][(i + 1) % 3] * abs_r((i + 2) % 3, j) +
-                                   a_half_[d][(i + 2) % 3] * abs_r((i + 1) % 3, j);
-    }
-    for (int d = 0; d <= b.depth; ++d) {
-      b_size_[d] = (bb.max - bb.min) / double(1u << d);
-      b_half_[d] = (0.5 * s * b_size_[d]).array() + pad;
-      rad_b_[d] = abs_r * b_half_[d];
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j)
-          cross_b_[d][3 * i + j] = b_half_[d][(j + 1) % 3] * abs_r(i, (j + 2) % 3) +
-                                   b_half_[d][(j + 2) % 3] * abs_r(i, (j + 1) % 3);
-    }
-  }
-
-  bool overlap(const Entry& e) const {
-    const Eigen::Vector3d ca = a_min_ + a_size_[e.da].cwiseProduct(cell_center(e.ca));
-    const Eigen::Vector3d qb = b_min_ + b_size_[e.db].cwiseProduct(cell_center(e.cb));
-    const Eigen::Vector3d t = (t_ + sr_ * qb) - ca;  // B's centre relative to A's
-    const Eigen::Vector3d& ah = a_half_[e.da];
-    const Eigen::Vector3d& bh = b_half_[e.db];
-    // A's face normals.
-    for (int i = 0; i < 3; ++i)
-      if (std::abs(t[i]) > ah[i] + rad_b_[e.db][i]) return false;
-    // B's face normals.
-    const Eigen::Vector3d u = r_.transpose() * t;
-    for (int j = 0; j < 3; ++j)
-      if (std::abs(u[j]) > rad_a_[e.da][j] + bh[j]) return false;
-    // Edge-edge axes A_i x B_j.
-    const auto& xa = cross_a_[e.da];
-    const auto& xb = cross_b_[e.db];
-    for (int i = 0; i < 3; ++i) {
-      const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
-      for (int j = 0; j < 3; ++j) {
-        const double lhs = std::abs(t[i2] * r_(i1, j) - t[i1] * r_(i2, j));
-        if (lhs > xa[3 * i + j] + xb[3 * i + j]) return false;
-      }
-    }
-    return true;
-  }
-
- private:
-  Eigen::Matrix3d r_, sr_;
-  Eigen::Vector3d t_, a_min_, b_min_;
-  std::array<Eigen::Vector3d, kMaxDepth + 1> a_size_, b_size_, a_half_, b_half_, rad_a_, rad_b_;
-  std::array<std::array<double, 9>, kMaxDepth + 1> cross_a_, cross_b_;
-};
+BoxCoord to_coord(const Coord& c) { return {c[0], c[1], c[2]}; }
+Coord from_coord(const BoxCoord& c) { return {uint16_t(c.x), uint16_t(c.y), uint16_t(c.z)}; }
+Eigen::Vector3d cell_center(const Coord& c) { return {c[0] + 0.5, c[1] + 0.5, c[2] + 0.5}; }
 
 // A total order on placed trees, by content first so that results (and box
 // test counts) do not depend on argument order or on allocation addresses.
@@ -152,7 +69,664 @@ void check(const PlacedTree& p) {
   (void)p;
 }
 
-// Depth-first descent in canonical order; on_leaf(entry) returns true to stop.
+// The relative placement shared by both descents: q_A = t + s R q_B in A's
+// local (unscaled) frame, and the padding of every box.
+struct Relative {
+  Eigen::Matrix3d r, sr, abs_r;  // abs_r = |R| + kAxisPad
+  Eigen::Vector3d t;
+  double s = 1, pad = 0;
+
+  Relative(const PlacedTree& a, const PlacedTree& b) {
+    const Eigen::Matrix3d ra = a.pose.rotation.toRotationMatrix();
+    const Eigen::Matrix3d rb = b.pose.rotation.toRotationMatrix();
+    s = b.pose.scale / a.pose.scale;
+    // Subtract first: equal world offsets (1e7) cancel before any product.
+    const Eigen::Vector3d dp = b.pose.position - a.pose.position;
+    r = ra.transpose() * rb;
+    sr = s * r;
+    t = ra.transpose() * dp / a.pose.scale;
+    abs_r = r.cwiseAbs().array() + kAxisPad;
+    const Aabb& ba = a.tree->bounds();
+    const Aabb& bb = b.tree->bounds();
+    const double mag_a = std::max(ba.min.cwiseAbs().maxCoeff(), ba.max.cwiseAbs().maxCoeff());
+    const double mag_b = std::max(bb.min.cwiseAbs().maxCoeff(), bb.max.cwiseAbs().maxCoeff());
+    pad = kRelPad * (mag_a + s * mag_b + t.cwiseAbs().maxCoeff());
+  }
+};
+
+// Is box c at depth d occupied in the tree?
+bool occupied(const ObjectTree& tree, int depth, const BoxCoord& c) {
+  const uint32_t end = 1u << depth;
+  if (depth > tree.loaded_depth() || c.x >= end || c.y >= end || c.z >= end) return false;
+  uint32_t index = 0;
+  for (int d = 0; d < depth; ++d) {
+    const int shift = depth - 1 - d;
+    const uint32_t octant = ((c.x >> shift) & 1u) | (((c.y >> shift) & 1u) << 1) | (((c.z >> shift) & 1u) << 2);
+    const uint8_t mask = tree.mask(d, index);
+    if (!(mask & (1u << octant))) return false;
+    index = tree.first_child(d, index) + uint32_t(std::popcount(unsigned(mask & ((1u << octant) - 1))));
+  }
+  return true;
+}
+
+// ---- The box-test kernel ---------------------------------------------------
+// A box pair is described by its 15 separating axis projections of the centre
+// offset (B's centre minus A's, in A's frame), lanes in this order: A's faces
+// 0..2, B's faces 3..5, edge pairs A_i x B_j at 6 + 3i + j, lane 15 idle
+// (always 0 against radius 0). The pair is separated iff some |p_k| > r_k.
+//
+// children_overlap(parent, ra, rb, offset, scale, octant, n, out): the
+// children `octant[0..n)` of the split box against the other box. Child c's
+// projections are parent + scale * offset[octant[c]] (scale a power of two,
+// so the product is exact), written to out[c]; bit c of the result is set
+// iff child c overlaps (radii ra + rb lane by lane). Three builds: plain C++,
+// AVX2 and AVX-512. Each lane is one multiplication, one addition, one
+// absolute value and one ordered comparison (no fused multiply-add), so all
+// three give identical bits.
+constexpr int kLanes = 16;
+using Lanes = double[kLanes];
+
+using Kernel = uint32_t (*)(const double* parent, const double* ra, const double* rb, const Lanes* offset,
+                            double scale, const uint8_t* octant, int n, Lanes* out);
+
+uint32_t children_overlap_portable(const double* parent, const double* ra, const double* rb, const Lanes* offset,
+                                   double scale, const uint8_t* octant, int n, Lanes* out) {
+  double radius[kLanes];
+  for (int k = 0; k < kLanes; ++k) radius[k] = ra[k] + rb[k];
+  uint32_t overlapping = 0;
+  for (int c = 0; c < n; ++c) {
+    const double* o = offset[octant[c]];
+    bool separated = false;
+    for (int k = 0; k < kLanes; ++k) {
+      out[c][k] = parent[k] + o[k] * scale;
+      separated |= std::abs(out[c][k]) > radius[k];
+    }
+    overlapping |= uint32_t(!separated) << c;
+  }
+  return overlapping;
+}
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define OCTBAKE_X86_KERNELS 1
+
+[[gnu::target("avx2")]] uint32_t children_overlap_avx2(const double* parent, const double* ra, const double* rb,
+                                                       const Lanes* offset, double scale, const uint8_t* octant,
+                                                       int n, Lanes* out) {
+  const __m256d s = _mm256_set1_pd(scale);
+  const __m256d not_sign = _mm256_castsi256_pd(_mm256_set1_epi64x(INT64_MAX));  // |x| is one AND
+  __m256d p[4], r[4];
+  for (int k = 0; k < 4; ++k) {
+    p[k] = _mm256_loadu_pd(parent + 4 * k);
+    r[k] = _mm256_add_pd(_mm256_loadu_pd(ra + 4 * k), _mm256_loadu_pd(rb + 4 * k));
+  }
+  uint32_t overlapping = 0;
+  for (int c = 0; c < n; ++c) {
+    const double* o = offset[octant[c]];
+    __m256d separated = _mm256_setzero_pd();
+    for (int k = 0; k < 4; ++k) {
+      const __m256d q = _mm256_add_pd(p[k], _mm256_mul_pd(_mm256_loadu_pd(o + 4 * k), s));
+      _mm256_storeu_pd(out[c] + 4 * k, q);
+      separated = _mm256_or_pd(separated, _mm256_cmp_pd(_mm256_and_pd(q, not_sign), r[k], _CMP_GT_OQ));
+    }
+    overlapping |= uint32_t(_mm256_movemask_pd(separated) == 0) << c;
+  }
+  return overlapping;
+}
+
+[[gnu::target("avx512f")]] uint32_t children_overlap_avx512(const double* parent, const double* ra, const double* rb,
+                                                            const Lanes* offset, double scale, const uint8_t* octant,
+                                                            int n, Lanes* out) {
+  const __m512d s = _mm512_set1_pd(scale);
+  const __m512d p0 = _mm512_loadu_pd(parent), p1 = _mm512_loadu_pd(parent + 8);
+  const __m512d r0 = _mm512_add_pd(_mm512_loadu_pd(ra), _mm512_loadu_pd(rb));
+  const __m512d r1 = _mm512_add_pd(_mm512_loadu_pd(ra + 8), _mm512_loadu_pd(rb + 8));
+  uint32_t overlapping = 0;
+  for (int c = 0; c < n; ++c) {
+    const double* o = offset[octant[c]];
+    const __m512d q0 = _mm512_add_pd(p0, _mm512_mul_pd(_mm512_loadu_pd(o), s));
+    const __m512d q1 = _mm512_add_pd(p1, _mm512_mul_pd(_mm512_loadu_pd(o + 8), s));
+    _mm512_storeu_pd(out[c], q0);
+    _mm512_storeu_pd(out[c] + 8, q1);
+    const __mmask8 separated = __mmask8(_mm512_cmp_pd_mask(_mm512_abs_pd(q0), r0, _CMP_GT_OQ) |
+                                        _mm512_cmp_pd_mask(_mm512_abs_pd(q1), r1, _CMP_GT_OQ));
+    overlapping |= uint32_t(separated == 0) << c;
+  }
+  return overlapping;
+}
+#endif
+
+// ---- Per-pair lane tables -------------------------------------------------
+// Built once per pair test from the relative placement. Plain loops over the
+// 16 lanes, compiled once per ISA (vectorised by the compiler); the same
+// operations in the same order, so every build gives the same bits.
+struct TableInput {
+  Lanes w[3], abs_wa[3], abs_wb[3];  // projection and radius weights (see PairFrame)
+  double sr[3][3];                   // sR, column j = B's local axis j in A's frame
+  double quarter_a[3], quarter_b[3]; // a quarter of each root's size (local units)
+  double half_a[3], half_b[3];       // half of each root's size, B's scaled to A's units
+  double pad;
+  int depth_a, depth_b;
+};
+
+struct LaneTables {
+  // Offsets of the 8 children at depth 1, octant order: at depth d they are
+  // these times 2^(1-d), exactly.
+  alignas(64) Lanes offset_a[8], offset_b[8];
+  // Radius of every padded box on every axis, per depth.
+  alignas(64) Lanes radius_a[kMaxDepth + 1], radius_b[kMaxDepth + 1];
+};
+
+// Written per chunk of 4 lanes with GCC/Clang vector types, loaded and stored
+// through pointers only: the compiler then emits one vector operation per
+// chunk for whatever ISA the caller is built for (left to the
+// auto-vectoriser, these loops came out as shuffles).
+using v4d = double __attribute__((vector_size(32)));
+using v4d_mem = double __attribute__((vector_size(32), aligned(8), may_alias));
+[[gnu::always_inline]] inline void load4(v4d& v, const double* p) { v = *reinterpret_cast<const v4d_mem*>(p); }
+[[gnu::always_inline]] inline void store4(double* p, const v4d& v) { *reinterpret_cast<v4d_mem*>(p) = v; }
+
+// A child at depth 1 sits at the root's centre +- q on each axis m of its
+// tree; weights[m] give the effect on the projections (times sign). Octants
+// 7 - j are the negations of octants j (negation is exact).
+[[gnu::always_inline]] inline void fill_offsets(Lanes* offset, const Lanes* weights, const double* q, double sign) {
+  const double f0 = sign * q[0], f1 = sign * q[1], f2 = sign * q[2];
+  for (int c = 0; c < kLanes; c += 4) {
+    v4d w0, w1, w2;
+    load4(w0, weights[0] + c);
+    load4(w1, weights[1] + c);
+    load4(w2, weights[2] + c);
+    const v4d e0 = w0 * f0, e1 = w1 * f1, e2 = w2 * f2;
+    const v4d s01 = e0 + e1, d01 = e0 - e1;  // +x+y, +x-y
+    const v4d o0 = -(s01 + e2), o1 = d01 - e2, o2 = -(d01 + e2), o3 = s01 - e2;
+    store4(offset[0] + c, o0);  // -x-y-z
+    store4(offset[1] + c, o1);  // +x-y-z
+    store4(offset[2] + c, o2);  // -x+y-z
+    store4(offset[3] + c, o3);  // +x+y-z
+    store4(offset[7] + c, -o0);
+    store4(offset[6] + c, -o1);
+    store4(offset[5] + c, -o2);
+    store4(offset[4] + c, -o3);
+  }
+}
+
+// Radius of the padded box at each depth: weights . (half / 2^d + pad).
+[[gnu::always_inline]] inline void fill_radii(Lanes* radius, const Lanes* weights, const double* half, double pad,
+                                              int depth) {
+  for (int c = 0; c < kLanes; c += 4) {
+    v4d w0, w1, w2;
+    load4(w0, weights[0] + c);
+    load4(w1, weights[1] + c);
+    load4(w2, weights[2] + c);
+    const v4d base = (w0 * half[0] + w1 * half[1]) + w2 * half[2];
+    const v4d padding = ((w0 + w1) + w2) * pad;
+    for (int d = 0; d <= depth; ++d) store4(radius[d] + c, base * kHalfPow[d] + padding);
+  }
+}
+
+[[gnu::always_inline]] inline void build_tables(const TableInput& in, LaneTables& out) {
+  // B's local axis j moves its centre by sR e_j in A's frame.
+  Lanes wb[3];
+  for (int c = 0; c < kLanes; c += 4) {
+    v4d w0, w1, w2;
+    load4(w0, in.w[0] + c);
+    load4(w1, in.w[1] + c);
+    load4(w2, in.w[2] + c);
+    for (int j = 0; j < 3; ++j) store4(wb[j] + c, (w0 * in.sr[0][j] + w1 * in.sr[1][j]) + w2 * in.sr[2][j]);
+  }
+  // t = centre B - centre A: A's child moving by +q moves t by -q.
+  fill_offsets(out.offset_a, in.w, in.quarter_a, -1.0);
+  fill_offsets(out.offset_b, wb, in.quarter_b, 1.0);
+  fill_radii(out.radius_a, in.abs_wa, in.half_a, in.pad, in.depth_a);
+  fill_radii(out.radius_b, in.abs_wb, in.half_b, in.pad, in.depth_b);
+}
+
+using Builder = void (*)(const TableInput&, LaneTables&);
+void build_tables_portable(const TableInput& in, LaneTables& out) { build_tables(in, out); }
+#ifdef OCTBAKE_X86_KERNELS
+[[gnu::target("avx2")]] void build_tables_avx2(const TableInput& in, LaneTables& out) { build_tables(in, out); }
+[[gnu::target("avx512f")]] void build_tables_avx512(const TableInput& in, LaneTables& out) { build_tables(in, out); }
+#endif
+
+std::atomic<BoxKernel> chosen_kernel{BoxKernel::best};
+
+bool cpu_has(BoxKernel k) {
+  switch (k) {
+    case BoxKernel::best:
+    case BoxKernel::portable:
+      return true;
+#ifdef OCTBAKE_X86_KERNELS
+    case BoxKernel::avx2:
+      return __builtin_cpu_supports("avx2");
+    case BoxKernel::avx512:
+      return __builtin_cpu_supports("avx512f");
+#else
+    default:
+      return false;
+#endif
+  }
+  return false;
+}
+
+struct Isa {
+  Kernel kernel;
+  Builder build;
+};
+
+Isa isa_of(BoxKernel k) {
+#ifdef OCTBAKE_X86_KERNELS
+  if (k == BoxKernel::avx512) return {children_overlap_avx512, build_tables_avx512};
+  if (k == BoxKernel::avx2) return {children_overlap_avx2, build_tables_avx2};
+#endif
+  (void)k;
+  return {children_overlap_portable, build_tables_portable};
+}
+
+Isa pick_isa() {
+  static const BoxKernel best = cpu_has(BoxKernel::avx512) ? BoxKernel::avx512
+                                : cpu_has(BoxKernel::avx2) ? BoxKernel::avx2
+                                                           : BoxKernel::portable;
+  const BoxKernel k = chosen_kernel.load(std::memory_order_relaxed);
+  return isa_of(k == BoxKernel::best ? best : k);
+}
+
+// ---- The pair frame --------------------------------------------------------
+// Per pair: the projection matrix W (p = W t), and per depth and tree, lazily,
+// the 16-lane radii and the 8 child offsets of the projections.
+class PairFrame {
+ public:
+  PairFrame(const PlacedTree& a, const PlacedTree& b, const Isa& isa)
+      : rel_(a, b), depth_a_(a.depth), depth_b_(b.depth), kernel_(isa.kernel) {
+    const Eigen::Matrix3d& r = rel_.r;
+    const Eigen::Matrix3d& ar = rel_.abs_r;
+    // w[m][k]: weight of t_m in projection k; abs_w*: weights of A's and B's
+    // half extents in the radii (Gottschalk's formulas, with |R| padded).
+    // Every entry is written once (no zero fill: this runs per pair).
+    TableInput& in = in_;
+    for (int i = 0; i < 3; ++i)
+      for (int m = 0; m < 3; ++m) {
+        in.w[m][i] = in.abs_wa[m][i] = m == i ? 1 : 0;  // A's face i
+        in.w[m][3 + i] = r(m, i);                       // B's face i
+        in.abs_wa[m][3 + i] = ar(m, i);
+        in.abs_wb[m][i] = ar(i, m);
+        in.abs_wb[m][3 + i] = m == i ? 1 : 0;
+      }
+    for (int i = 0; i < 3; ++i) {  // edge pairs A_i x B_j
+      const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
+      for (int j = 0; j < 3; ++j) {
+        const int k = 6 + 3 * i + j, j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+        in.w[i][k] = 0;
+        in.w[i2][k] = r(i1, j);
+        in.w[i1][k] = -r(i2, j);
+        in.abs_wa[i][k] = 0;
+        in.abs_wa[i1][k] = ar(i2, j);
+        in.abs_wa[i2][k] = ar(i1, j);
+        in.abs_wb[j][k] = 0;
+        in.abs_wb[j1][k] = ar(i, j2);
+        in.abs_wb[j2][k] = ar(i, j1);
+      }
+    }
+    for (int m = 0; m < 3; ++m) in.w[m][15] = in.abs_wa[m][15] = in.abs_wb[m][15] = 0;  // the idle lane
+    const Aabb& ba = a.tree->bounds();
+    const Aabb& bb = b.tree->bounds();
+    a_min_ = ba.min;
+    b_min_ = bb.min;
+    a_size_ = ba.max - ba.min;
+    b_size_ = bb.max - bb.min;
+    size_a_ = (0.5 * a_size_).squaredNorm();
+    size_b_ = (0.5 * rel_.s * b_size_).squaredNorm();
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) in.sr[i][j] = rel_.sr(i, j);
+      in.quarter_a[i] = 0.25 * a_size_[i];
+      in.quarter_b[i] = 0.25 * b_size_[i];
+      in.half_a[i] = 0.5 * a_size_[i];
+      in.half_b[i] = 0.5 * rel_.s * b_size_[i];
+    }
+    in.pad = rel_.pad;
+    in.depth_a = a.depth;
+    in.depth_b = b.depth;
+    isa.build(in, t_);
+  }
+
+  // Split A rather than B at depths (da, db)? The larger box splits (half
+  // diagonals in A's units, both halving with each depth).
+  bool split_a(int da, int db) const {
+    if (da == depth_a_) return false;
+    if (db == depth_b_) return true;
+    return size_a_ * kHalfPow[2 * da] >= size_b_ * kHalfPow[2 * db];  // both exact
+  }
+
+  // Projections of box pair (A's ca at da, B's cb at db).
+  void project(const Coord& ca, int da, const Coord& cb, int db, Lanes& p) const {
+    const Eigen::Vector3d qa = a_min_ + kHalfPow[da] * a_size_.cwiseProduct(cell_center(ca));
+    const Eigen::Vector3d qb = b_min_ + kHalfPow[db] * b_size_.cwiseProduct(cell_center(cb));
+    const Eigen::Vector3d t = (rel_.t + rel_.sr * qb) - qa;
+    const Lanes* w = in_.w;
+    for (int k = 0; k < kLanes; ++k) p[k] = (w[0][k] * t[0] + w[1][k] * t[1]) + w[2][k] * t[2];
+  }
+
+  bool overlap(const double* p, int da, int db) const {
+    bool separated = false;
+    for (int k = 0; k < kLanes; ++k) separated |= std::abs(p[k]) > t_.radius_a[da][k] + t_.radius_b[db][k];
+    return !separated;
+  }
+
+  // Does the padded box of one side lie inside the other's, with a margin of
+  // one pad for rounding? Then every leaf under the inner box overlaps the
+  // outer box. Checked on the outer box's face axes (lanes 0..2 for A, 3..5
+  // for B), where the inner box's radius bounds its extent (|R| padded).
+  bool b_inside_a(const double* p, int da, int db) const { return inside(p, t_.radius_b[db], t_.radius_a[da], 0); }
+  bool a_inside_b(const double* p, int da, int db) const { return inside(p, t_.radius_a[da], t_.radius_b[db], 3); }
+
+  // Test the children of A's box (split_a) or B's box at depth d against the
+  // other box at its depth `other`: see children_overlap.
+  uint32_t children_overlap(bool split_a, int d, int other, const double* parent, const uint8_t* octant, int n,
+                            Lanes* out) const {
+    const double scale = kHalfPow[d];  // children at depth d + 1
+    return split_a ? kernel_(parent, t_.radius_a[d + 1], t_.radius_b[other], t_.offset_a, scale, octant, n, out)
+                   : kernel_(parent, t_.radius_a[other], t_.radius_b[d + 1], t_.offset_b, scale, octant, n, out);
+  }
+
+ private:
+  bool inside(const double* p, const double* inner, const double* outer, int lane) const {
+    bool in = true;
+    for (int k = lane; k < lane + 3; ++k) in &= (std::abs(p[k]) + inner[k]) + rel_.pad <= outer[k];
+    return in;
+  }
+
+  Relative rel_;
+  int depth_a_, depth_b_;
+  Kernel kernel_;
+  TableInput in_;  // kept for its projection weights w
+  Eigen::Vector3d a_min_, b_min_, a_size_, b_size_;  // root sizes
+  double size_a_, size_b_;                          // squared root half diagonals, A's units
+  LaneTables t_;
+};
+
+// A box pair known to overlap, waiting on the descent stack. Its projections
+// live in the pool block of its parent's path level (see descend).
+struct Entry {
+  const double* p;
+  uint32_t ia, ib;  // level indices
+  Coord ca, cb;
+  uint8_t da, db;
+};
+
+// DFS stack bound: an expansion pushes <= 8 pairs and a path has at most
+// da + db <= 2 * kMaxDepth expansions, each leaving its pushes on the stack.
+constexpr size_t kStackSize = 8 * 2 * kMaxDepth + 1;
+constexpr int kPathLevels = 2 * kMaxDepth;
+
+// The occupied octants of every child mask, in order.
+struct OctantTable {
+  uint8_t count[256];
+  uint8_t octant[256][8];
+  constexpr OctantTable() : count{}, octant{} {
+    for (int m = 0; m < 256; ++m)
+      for (int j = 0; j < 8; ++j)
+        if (m & (1 << j)) octant[m][count[m]++] = uint8_t(j);
+  }
+};
+constexpr OctantTable kOctants;
+
+// Some occupied leaf (at `depth`) under box (d, index, c), lowest octants
+// first; false if the box has none.
+bool some_leaf(const ObjectTree& tree, int depth, int d, uint32_t index, const Coord& c, Coord& leaf) {
+  if (d == depth) return leaf = c, true;
+  const uint8_t mask = tree.mask(d, index);
+  const uint32_t first = tree.first_child(d, index);
+  for (int k = 0; k < kOctants.count[mask]; ++k) {
+    const uint8_t j = kOctants.octant[mask][k];
+    const Coord child{uint16_t(2 * c[0] + (j & 1u)), uint16_t(2 * c[1] + ((j >> 1) & 1u)),
+                      uint16_t(2 * c[2] + ((j >> 2) & 1u))};
+    if (some_leaf(tree, depth, d + 1, first + uint32_t(k), child, leaf)) return true;
+  }
+  return false;
+}
+
+// Depth-first descent in canonical order, calling on_leaf(a's leaf, b's
+// leaf) for each overlapping leaf pair: only the first if kFirstOnly.
+template <bool kFirstOnly, class OnLeaf>
+void descend(const PairFrame& frame, const PlacedTree& a, const PlacedTree& b, PairTest& result, OnLeaf on_leaf) {
+  // The children of a pair at path level L = da + db write their projections
+  // to pool[L]: depth first, every pair of level L + 1 waiting on the stack
+  // was made by the one expansion at level L still open, so nothing there is
+  // overwritten before it is used. No copies.
+  alignas(64) Lanes pool[kPathLevels][8];
+  alignas(64) Lanes root_p;
+  std::array<Entry, kStackSize> stack;
+  size_t n = 0;
+  frame.project({0, 0, 0}, 0, {0, 0, 0}, 0, root_p);
+  ++result.box_tests;
+  if (!frame.overlap(root_p, 0, 0)) return;
+  stack[n++] = Entry{root_p, 0, 0, {0, 0, 0}, {0, 0, 0}, 0, 0};
+  while (n > 0) {
+    // Field by field: a block copy would reload the pushed fields in wider
+    // loads than they were stored with (a store-forwarding stall).
+    const Entry& top = stack[--n];
+    const Entry e{top.p, top.ia, top.ib, top.ca, top.cb, top.da, top.db};
+    const bool split_a = frame.split_a(e.da, e.db);
+    if (!split_a && e.db == b.depth) {  // neither can split: a leaf pair
+      result.hit = true;
+      on_leaf(e.ca, e.cb);
+      if (kFirstOnly) return;
+      continue;
+    }
+    const ObjectTree& tree = split_a ? *a.tree : *b.tree;
+    const int d = split_a ? e.da : e.db;
+    const uint32_t index = split_a ? e.ia : e.ib;
+    // The other box is a leaf and holds this one whole: any leaf below is a
+    // proof (counted as the one box test it replaces).
+    if (kFirstOnly && (split_a ? e.db == b.depth && frame.a_inside_b(e.p, e.da, e.db)
+                               : e.da == a.depth && frame.b_inside_a(e.p, e.da, e.db))) {
+      Coord leaf;
+      if (some_leaf(tree, split_a ? a.depth : b.depth, d, index, split_a ? e.ca : e.cb, leaf)) {
+        ++result.box_tests;
+        result.hit = true;
+        split_a ? on_leaf(leaf, e.cb) : on_leaf(e.ca, leaf);
+        return;
+      }
+    }
+    const uint8_t mask = tree.mask(d, index);
+    const uint32_t first = tree.first_child(d, index);
+    const int count = kOctants.count[mask];
+    const uint8_t* octant = kOctants.octant[mask];
+    Lanes* out = pool[e.da + e.db];
+    const uint32_t hits = frame.children_overlap(split_a, d, split_a ? e.db : e.da, e.p, octant, count, out);
+    result.box_tests += uint64_t(count);
+    if (hits == 0) continue;
+    // Nearest first: sort the overlapping children by centre distance
+    // (lanes 0..2 are the offset in A's axes), ties in octant order.
+    int order[8];
+    double key[8];
+    int m = 0;
+    for (int c = 0; c < count; ++c) {
+      if (!(hits & (1u << c))) continue;
+      const double k = (out[c][0] * out[c][0] + out[c][1] * out[c][1]) + out[c][2] * out[c][2];
+      int at = m++;
+      for (; at > 0 && key[at - 1] > k; --at) order[at] = order[at - 1], key[at] = key[at - 1];
+      order[at] = c, key[at] = k;
+    }
+    assert(n + size_t(m) <= kStackSize);
+    // Pushed farthest first so that the nearest is popped next.
+    const Coord& grown = split_a ? e.ca : e.cb;
+    for (int s = m - 1; s >= 0; --s) {
+      const int c = order[s];
+      const uint8_t j = octant[c];
+      const Coord coord{uint16_t(2 * grown[0] + (j & 1u)), uint16_t(2 * grown[1] + ((j >> 1) & 1u)),
+                        uint16_t(2 * grown[2] + ((j >> 2) & 1u))};
+      stack[n++] = split_a ? Entry{out[c], first + uint32_t(c), e.ib, coord, e.cb, uint8_t(e.da + 1), e.db}
+                           : Entry{out[c], e.ia, first + uint32_t(c), e.ca, coord, e.da, uint8_t(e.db + 1)};
+    }
+  }
+}
+
+// The pair in canonical order, the leaf pair mapped back on the way out.
+struct Canonical {
+  const PlacedTree& first;
+  const PlacedTree& second;
+  bool swapped;
+  Canonical(const PlacedTree& a, const PlacedTree& b) : Canonical(a, b, !goes_first(a, b)) {}
+  Canonical(const PlacedTree& a, const PlacedTree& b, bool swap)
+      : first(swap ? b : a), second(swap ? a : b), swapped(swap) {}
+  LeafPair to_caller(const Coord& c1, const Coord& c2) const {
+    return swapped ? LeafPair{to_coord(c2), to_coord(c1)} : LeafPair{to_coord(c1), to_coord(c2)};
+  }
+};
+
+// collide() with an optional leaf pair (in the caller's order) to try first.
+PairTest collide_with_hint(const PlacedTree& a, const PlacedTree& b, const LeafPair* hint) {
+  check(a);
+  check(b);
+  const Canonical pair(a, b);
+  const PairFrame frame(pair.first, pair.second, pick_isa());
+  PairTest result;
+  if (hint) {
+    const Coord c1 = from_coord(pair.swapped ? hint->b : hint->a), c2 = from_coord(pair.swapped ? hint->a : hint->b);
+    Lanes p;
+    frame.project(c1, pair.first.depth, c2, pair.second.depth, p);
+    ++result.box_tests;
+    if (frame.overlap(p, pair.first.depth, pair.second.depth)) {
+      result.hit = true;
+      result.leaf = *hint;
+      return result;
+    }
+  }
+  descend<true>(frame, pair.first, pair.second, result,
+                [&](const Coord& ca, const Coord& cb) { result.leaf = pair.to_caller(ca, cb); });
+  return result;
+}
+
+}  // namespace
+
+bool use_box_kernel(BoxKernel kernel) {
+  if (!cpu_has(kernel)) return false;
+  chosen_kernel.store(kernel, std::memory_order_relaxed);
+  return true;
+}
+
+PairTest collide(const PlacedTree& a, const PlacedTree& b) { return collide_with_hint(a, b, nullptr); }
+
+PairTest collide(const PlacedTree& a, const PlacedTree& b, PairCache& cache) {
+  const bool usable = cache.tree_a != nullptr && cache.tree_a == a.tree && cache.tree_b == b.tree &&
+                      cache.depth_a == a.depth && cache.depth_b == b.depth &&
+                      occupied(*a.tree, a.depth, cache.leaf.a) && occupied(*b.tree, b.depth, cache.leaf.b);
+  const PairTest result = collide_with_hint(a, b, usable ? &cache.leaf : nullptr);
+  cache = result.hit ? PairCache{a.tree, b.tree, a.depth, b.depth, result.leaf} : PairCache{};
+  return result;
+}
+
+OrientedBox leaf_box(const PlacedTree& p, const BoxCoord& c) {
+  return place(p.tree->masks().box_bounds(p.depth, c), p.pose);
+}
+
+PairTest collide_all(const PlacedTree& a, const PlacedTree& b, std::vector<LeafPair>& out) {
+  check(a);
+  check(b);
+  const Canonical pair(a, b);
+  const PairFrame frame(pair.first, pair.second, pick_isa());
+  PairTest result;
+  descend<false>(frame, pair.first, pair.second, result,
+                 [&](const Coord& ca, const Coord& cb) { out.push_back(pair.to_caller(ca, cb)); });
+  return result;
+}
+
+// ---- Reference descent -----------------------------------------------------
+// Both trees split at once, child pairs in octant order, one scalar 15-axis
+// test per box pair computed from the two centres.
+namespace {
+namespace reference {
+
+// DFS stack bound: an expansion pushes <= 64 pairs when both trees descend and
+// <= 8 when one does; a path holds at most min(da, db) of the first kind and
+// |da - db| of the second, each leaving its pushes on the stack.
+constexpr size_t kStackSize = 64 * kMaxDepth;
+
+struct Entry {
+  uint32_t ia, ib;
+  Coord ca, cb;
+  uint8_t da, db;
+};
+
+struct Child {
+  uint32_t index;
+  Coord coord;
+};
+
+// Occupied children of box (d, i, c), in octant order.
+int children(const ObjectTree& tree, int d, uint32_t i, const Coord& c, Child* out) {
+  const uint8_t mask = tree.mask(d, i);
+  uint32_t next = tree.first_child(d, i);
+  int n = 0;
+  for (uint32_t j = 0; j < 8; ++j) {
+    if (!(mask & (1u << j))) continue;
+    out[n++] = {next++,
+                {uint16_t(2 * c[0] + (j & 1u)), uint16_t(2 * c[1] + ((j >> 1) & 1u)),
+                 uint16_t(2 * c[2] + ((j >> 2) & 1u))}};
+  }
+  return n;
+}
+
+// B's boxes in A's frame with per-depth radii: a box test is two centres and
+// 15 comparisons.
+class PairFrame {
+ public:
+  PairFrame(const PlacedTree& a, const PlacedTree& b) : rel_(a, b) {
+    const Eigen::Matrix3d& abs_r = rel_.abs_r;
+    const Aabb& ba = a.tree->bounds();
+    const Aabb& bb = b.tree->bounds();
+    a_min_ = ba.min;
+    b_min_ = bb.min;
+    for (int d = 0; d <= a.depth; ++d) {
+      a_size_[d] = (ba.max - ba.min) / double(1u << d);
+      a_half_[d] = (0.5 * a_size_[d]).array() + rel_.pad;
+      rad_a_[d] = abs_r.transpose() * a_half_[d];
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          cross_a_[d][3 * i + j] = a_half_[d][(i + 1) % 3] * abs_r((i + 2) % 3, j) +
+                                   a_half_[d][(i + 2) % 3] * abs_r((i + 1) % 3, j);
+    }
+    for (int d = 0; d <= b.depth; ++d) {
+      b_size_[d] = (bb.max - bb.min) / double(1u << d);
+      b_half_[d] = (0.5 * rel_.s * b_size_[d]).array() + rel_.pad;
+      rad_b_[d] = abs_r * b_half_[d];
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          cross_b_[d][3 * i + j] = b_half_[d][(j + 1) % 3] * abs_r(i, (j + 2) % 3) +
+                                   b_half_[d][(j + 2) % 3] * abs_r(i, (j + 1) % 3);
+    }
+  }
+
+  bool overlap(const Entry& e) const {
+    const Eigen::Matrix3d& r = rel_.r;
+    const Eigen::Vector3d ca = a_min_ + a_size_[e.da].cwiseProduct(cell_center(e.ca));
+    const Eigen::Vector3d qb = b_min_ + b_size_[e.db].cwiseProduct(cell_center(e.cb));
+    const Eigen::Vector3d t = (rel_.t + rel_.sr * qb) - ca;  // B's centre relative to A's
+    const Eigen::Vector3d& ah = a_half_[e.da];
+    const Eigen::Vector3d& bh = b_half_[e.db];
+    for (int i = 0; i < 3; ++i)  // A's face normals
+      if (std::abs(t[i]) > ah[i] + rad_b_[e.db][i]) return false;
+    const Eigen::Vector3d u = r.transpose() * t;
+    for (int j = 0; j < 3; ++j)  // B's face normals
+      if (std::abs(u[j]) > rad_a_[e.da][j] + bh[j]) return false;
+    const auto& xa = cross_a_[e.da];
+    const auto& xb = cross_b_[e.db];
+    for (int i = 0; i < 3; ++i) {  // edge-edge axes A_i x B_j
+      const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
+      for (int j = 0; j < 3; ++j) {
+        const double lhs = std::abs(t[i2] * r(i1, j) - t[i1] * r(i2, j));
+        if (lhs > xa[3 * i + j] + xb[3 * i + j]) return false;
+      }
+    }
+    return true;
+  }
+
+ private:
+  Relative rel_;
+  Eigen::Vector3d a_min_, b_min_;
+  std::array<Eigen::Vector3d, kMaxDepth + 1> a_size_, b_size_, a_half_, b_half_, rad_a_, rad_b_;
+  std::array<std::array<double, 9>, kMaxDepth + 1> cross_a_, cross_b_;
+};
+
 template <class OnLeaf>
 PairTest descend(const PlacedTree& a, const PlacedTree& b, OnLeaf on_leaf) {
   check(a);
@@ -185,40 +759,28 @@ PairTest descend(const PlacedTree& a, const PlacedTree& b, OnLeaf on_leaf) {
   return result;
 }
 
-BoxCoord to_coord(const std::array<uint16_t, 3>& c) { return {c[0], c[1], c[2]}; }
+template <class OnLeaf>
+PairTest run(const PlacedTree& a, const PlacedTree& b, OnLeaf on_leaf) {
+  const Canonical pair(a, b);
+  return descend(pair.first, pair.second, [&](const Entry& e) { return on_leaf(pair.to_caller(e.ca, e.cb)); });
+}
 
+}  // namespace reference
 }  // namespace
 
-PairTest collide(const PlacedTree& a, const PlacedTree& b) {
+PairTest collide_reference(const PlacedTree& a, const PlacedTree& b) {
   LeafPair found;
-  if (goes_first(a, b)) {
-    PairTest t = descend(a, b, [&](const Entry& e) {
-      found = {to_coord(e.ca), to_coord(e.cb)};
-      return true;
-    });
-    t.leaf = found;
-    return t;
-  }
-  PairTest t = descend(b, a, [&](const Entry& e) {
-    found = {to_coord(e.cb), to_coord(e.ca)};
+  PairTest t = reference::run(a, b, [&](const LeafPair& leaf) {
+    found = leaf;
     return true;
   });
   t.leaf = found;
   return t;
 }
 
-OrientedBox leaf_box(const PlacedTree& p, const BoxCoord& c) {
-  return place(p.tree->masks().box_bounds(p.depth, c), p.pose);
-}
-
-PairTest collide_all(const PlacedTree& a, const PlacedTree& b, std::vector<LeafPair>& out) {
-  if (goes_first(a, b))
-    return descend(a, b, [&](const Entry& e) {
-      out.push_back({to_coord(e.ca), to_coord(e.cb)});
-      return false;
-    });
-  return descend(b, a, [&](const Entry& e) {
-    out.push_back({to_coord(e.cb), to_coord(e.ca)});
+PairTest collide_all_reference(const PlacedTree& a, const PlacedTree& b, std::vector<LeafPair>& out) {
+  return reference::run(a, b, [&](const LeafPair& leaf) {
+    out.push_back(leaf);
     return false;
   });
 }

@@ -1,7 +1,9 @@
 // collide() against an exact mesh-mesh test (FCL): over random poses of real
 // meshes, at every depth pair, it never misses a contact, coarser depths never
-// report less than finer ones, and the argument order does not matter. Also
-// at a 1e7 world offset, at scales 1e-4 and 1e4, and for touching meshes.
+// report less than finer ones, the argument order does not matter, and the
+// scalar reference descent gives the same answer. Also at a 1e7 world offset,
+// at scales 1e-4 and 1e4, for touching meshes, for objects 400x to 4000x
+// apart in size, and for extreme aspect ratios (flat quads, needles, walls).
 #include <fcl/fcl.h>
 #include <gtest/gtest.h>
 
@@ -57,6 +59,13 @@ Mesh quad_mesh() {  // flat unit square in z = 0: a tree with a zero-thickness a
   Mesh m;
   m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
   m.triangles = {{0, 1, 2}, {1, 3, 2}};
+  return m;
+}
+
+// An axis-aligned box mesh of the given size (a needle when long and thin).
+Mesh box_mesh(const Eigen::Vector3d& size) {
+  Mesh m = cube_mesh();
+  for (auto& p : m.positions) p = p.cwiseProduct(size);
   return m;
 }
 
@@ -149,6 +158,8 @@ void check_grids(const PlacedTree& a0, const PlacedTree& b0, bool exact, const s
       const PairTest ab = collide(a, b), ba = collide(b, a);
       grid[da][db] = ab.hit;
       ASSERT_EQ(ab.hit, ba.hit) << what << " depths " << da << "-" << db;
+      ASSERT_EQ(ab.hit, collide_reference(a, b).hit) << "differs from the reference: " << what << " depths " << da
+                                                      << "-" << db;
       ASSERT_TRUE(ab.hit || !exact) << "missed contact: " << what << " depths " << da << "-" << db;
       ASSERT_TRUE(!ab.hit || da == 0 || grid[da - 1][db]) << what << " not monotone at " << da << "-" << db;
       ASSERT_TRUE(!ab.hit || db == 0 || grid[da][db - 1]) << what << " not monotone at " << da << "-" << db;
@@ -270,6 +281,109 @@ TEST(Oracle, SharedFacesHit) {
         if (::testing::Test::HasFatalFailure()) return;
       }
     }
+}
+
+// A random point on a mesh's surface (area-weighted triangle, uniform inside).
+Eigen::Vector3d surface_point(const Mesh& mesh, std::mt19937& rng) {
+  std::vector<double> area;
+  double total = 0;
+  for (const auto& t : mesh.triangles) {
+    const Eigen::Vector3d& p = mesh.positions[t[0]];
+    total += (mesh.positions[t[1]] - p).cross(mesh.positions[t[2]] - p).norm();
+    area.push_back(total);
+  }
+  const size_t i = size_t(std::lower_bound(area.begin(), area.end(), uniform01(rng) * total) - area.begin());
+  const auto& t = mesh.triangles[std::min(i, mesh.triangles.size() - 1)];
+  double u = uniform01(rng), v = uniform01(rng);
+  if (u + v > 1) u = 1 - u, v = 1 - v;
+  const Eigen::Vector3d& p = mesh.positions[t[0]];
+  return p + u * (mesh.positions[t[1]] - p) + v * (mesh.positions[t[2]] - p);
+}
+
+struct Counts {
+  int poses = 0, contacts = 0;
+};
+
+// B (radius `small`, A's is 1) centred near a random point of A's surface, at
+// most `reach` of its radius away: about half the poses touch.
+void small_near_surface(const Model& ma, const Model& mb, const std::shared_ptr<fcl::CollisionGeometryd>& ga,
+                        const std::shared_ptr<fcl::CollisionGeometryd>& gb, double small, double reach,
+                        std::mt19937& rng, Counts& counts, const std::string& what) {
+  Pose pa, pb;
+  pa.rotation = random_rotation(rng);
+  pb.rotation = random_rotation(rng);
+  pa.scale = 1 / ma.radius;
+  pb.scale = small / mb.radius;
+  pa.position = -(pa.rotation * (pa.scale * ma.centre));
+  const Eigen::Vector3d at = pa.apply(surface_point(ma.mesh, rng));
+  const Eigen::Vector3d dir = random_rotation(rng) * Eigen::Vector3d::UnitX();
+  pb.position = at + reach * small * uniform01(rng) * dir - pb.rotation * (pb.scale * mb.centre);
+  const fcl::CollisionObjectd oa(ga, to_fcl(pa)), ob(gb, to_fcl(pb));
+  const bool exact = fcl_collide(oa, ob);
+  counts.contacts += exact;
+  ++counts.poses;
+  check_grids({&ma.tree, pa, kDepth}, {&mb.tree, pb, kDepth}, exact, what);
+}
+
+// Objects 400x to 4000x smaller than the one they touch (or nearly touch).
+TEST(Oracle, SizeRatiosOf400AndMore) {
+  const auto& ms = models();
+  constexpr double kRatios[] = {400, 1000, 4000};
+  // FCL's BVHs, built once: each model at radius 1 and at each small radius.
+  std::vector<std::shared_ptr<fcl::CollisionGeometryd>> large;
+  std::vector<std::array<std::shared_ptr<fcl::CollisionGeometryd>, 3>> small;
+  for (const Model& m : ms) {
+    large.push_back(fcl_model(m.mesh, 1 / m.radius));
+    small.push_back({});
+    for (int r = 0; r < 3; ++r) small.back()[r] = fcl_model(m.mesh, 1 / (kRatios[r] * m.radius));
+  }
+  std::mt19937 rng(51);
+  const int poses = pose_count(600);
+  Counts counts;
+  for (int k = 0; k < poses; ++k) {
+    const size_t ia = rng() % ms.size(), ib = rng() % ms.size();
+    const int r = int(rng() % 3);
+    small_near_surface(ms[ia], ms[ib], large[ia], small[ib][r], 1 / kRatios[r], 3.0, rng, counts,
+                       "pose " + std::to_string(k) + " " + ms[ib].name + " 1/" + std::to_string(int(kRatios[r])) +
+                           " on " + ms[ia].name);
+    if (::testing::Test::HasFatalFailure()) return;
+  }
+  std::printf("  %d poses: %d contacts (FCL)\n", counts.poses, counts.contacts);
+  EXPECT_GT(counts.contacts, poses * 3 / 10);
+  EXPECT_LT(counts.contacts, poses * 7 / 10);
+}
+
+// Extreme aspect ratios: a flat quad and a 1000:1 needle against large
+// meshes, and a needle against a wall (a flat quad 50x its length).
+TEST(Oracle, ExtremeAspectRatios) {
+  const auto& ms = models();
+  const Model needle = make_model("needle", box_mesh({1, 1e-3, 1e-3}));
+  const Model wall = make_model("wall", quad_mesh());
+  const Model& quad = ms.back();
+  constexpr double kSmall = 0.1, kNeedleOnWall = 1.0 / 50;
+  std::vector<std::shared_ptr<fcl::CollisionGeometryd>> large;
+  for (const Model& m : ms) large.push_back(fcl_model(m.mesh, 1 / m.radius));
+  const auto quad_small = fcl_model(quad.mesh, kSmall / quad.radius);
+  const auto needle_small = fcl_model(needle.mesh, kSmall / needle.radius);
+  const auto needle_tiny = fcl_model(needle.mesh, kNeedleOnWall / needle.radius);
+  const auto wall_large = fcl_model(wall.mesh, 1 / wall.radius);
+  std::mt19937 rng(52);
+  const int poses = pose_count(450);
+  Counts counts;
+  for (int k = 0; k < poses; ++k) {
+    const size_t ia = rng() % (ms.size() - 2);  // the real meshes
+    const int kind = k % 3;
+    const std::string what = "pose " + std::to_string(k) + " kind " + std::to_string(kind);
+    if (kind == 0) small_near_surface(ms[ia], quad, large[ia], quad_small, kSmall, 2.5, rng, counts, what + " quad");
+    if (kind == 1)
+      small_near_surface(ms[ia], needle, large[ia], needle_small, kSmall, 2.5, rng, counts, what + " needle");
+    if (kind == 2)
+      small_near_surface(wall, needle, wall_large, needle_tiny, kNeedleOnWall, 2.5, rng, counts, what + " wall");
+    if (::testing::Test::HasFatalFailure()) return;
+  }
+  std::printf("  %d poses: %d contacts (FCL)\n", counts.poses, counts.contacts);
+  EXPECT_GT(counts.contacts, poses * 3 / 10);
+  EXPECT_LT(counts.contacts, poses * 7 / 10);
 }
 
 }  // namespace

@@ -1,19 +1,54 @@
 // Conservative pair tests between two posed ObjectTrees.
 //
-// A simultaneous descent from the roots down to each object's own depth,
-// backtracking through every overlapping child pair until one leaf pair
-// overlaps (early out). Boxes are compared as oriented boxes (separating axis
-// test) in A's frame, from the relative transform computed in double, each box
-// padded by a relative epsilon: if the meshes touch, the test reports it at
-// every depth pair. Symmetric in a and b: the pair is put in a canonical order
-// by content first, so hit and box_tests do not depend on argument order.
+// How the descent works. Both trees are compared in A's local frame (the
+// relative transform is computed once per pair, in double, positions
+// subtracted first). A pair of boxes is tested with the 15-axis separating
+// axis test of two oriented boxes; the descent starts at the two roots and,
+// at every overlapping box pair that is not yet a leaf pair, splits ONE box:
+// the larger one (half diagonal in A's units; a tree already at its depth
+// cannot split). All occupied children of the split box are tested against
+// the other box in one go, and the overlapping ones are visited nearest first
+// (distance between box centres), depth first, with full backtracking. The
+// first overlapping leaf pair ends the descent (early out): that pair proves
+// the hit and is reported. So a small object against a large one walks down
+// the large tree first, and the pairs most likely to touch are tried first.
+// One more early out: when the other box is already a leaf and holds the box
+// about to split whole (with a margin of one pad), any occupied leaf below
+// overlaps it, so the first one found (lowest octants first) proves the hit.
+// box_tests counts each child box tested, the root pair, a cached pair
+// (PairCache) and a containment proof (one each); a containment check that
+// fails reuses the pair's projections and is not counted.
 //
-// Padding: every box half extent grows by 1e-9 times the pair's coordinate
-// magnitude in A's frame (largest |local coordinate| of each root, B's scaled
-// by sb/sa, plus the offset between the two), far above double rounding and
-// far below a depth-12 leaf. A flat tree (zero-thickness axis) becomes a slab.
+// Box tests at memory speed. The 8 children of a box share its axes and sit at
+// its centre plus or minus a quarter of its size, so a child's projection on
+// each of the 15 axes is its parent's plus a signed sum of three terms,
+// precomputed per depth for the pair. A box pair carries its 15 projections
+// (16 lanes, one idle); testing a child is 16 additions, absolute values and
+// comparisons against precomputed radii (double precision; AVX-512 or AVX2
+// where the CPU has them, plain C++ otherwise; all give identical bits).
+//
+// Why it is conservative. If the meshes touch at a point x, x lies in an
+// occupied leaf box of each tree (the occupancy is conservative) and so in
+// every ancestor of both leaves. Every box pair on the path of ancestors
+// therefore overlaps, and the descent tests every child of every overlapping
+// pair it splits, so it reaches an overlapping leaf pair (perhaps another one
+// first). Ordering only changes which hit is found first, never whether; the
+// containment early out stops only where a leaf pair is known to overlap.
+// Rounding cannot turn an overlap into a separation: every box half extent
+// grows by 1e-9 times the pair's coordinate magnitude M in A's frame (largest
+// |local coordinate| of each root, B's scaled by sb/sa, plus the offset
+// between the two), and |R| gets 1e-9 added on the cross axes (Gottschalk's
+// guard for near-parallel edges); the projections accumulate at most a few
+// dozen roundings of M (1e-14 M), far below that padding, which itself stays
+// far below a depth-12 leaf. A padded child box lies inside its padded
+// parent, so coarser depths never report less than finer ones. A flat tree
+// (zero-thickness axis) becomes a slab.
+//
+// Symmetric in a and b: the pair is put in a canonical order by content first,
+// so hit, box_tests and leaf (mapped back to the caller's order) do not depend
+// on argument order. Deterministic: the same inputs give the same counts.
 // Preconditions (asserted): depth in 0..min(tree->loaded_depth(), 12), finite
-// pose, scale > 0, unit rotation. No heap allocation.
+// pose, scale > 0, unit rotation. No heap allocation (about 60 KB of stack).
 #pragma once
 #include <cstdint>
 #include <vector>
@@ -35,9 +70,20 @@ struct LeafPair {
 
 struct PairTest {
   bool hit = false;
-  uint64_t box_tests = 0;  // box-box overlap tests done
+  uint64_t box_tests = 0;  // box-box overlap tests done (one per child box tested)
   // With hit: the overlapping leaf pair that proved it (a in a's tree at
   // a.depth, b in b's tree at b.depth, in the caller's argument order).
+  LeafPair leaf;
+};
+
+// Temporal coherence: what the caller keeps per candidate pair between frames
+// (default-constructed = empty). Holds the leaf pair that proved the last hit
+// and the trees and depths it belongs to, in the argument order of the call
+// that stored it.
+struct PairCache {
+  const ObjectTree* tree_a = nullptr;  // nullptr: empty
+  const ObjectTree* tree_b = nullptr;
+  int depth_a = -1, depth_b = -1;
   LeafPair leaf;
 };
 
@@ -47,7 +93,32 @@ OrientedBox leaf_box(const PlacedTree& p, const BoxCoord& c);
 // Does any leaf of a (at a.depth) overlap any leaf of b (at b.depth)?
 PairTest collide(const PlacedTree& a, const PlacedTree& b);
 
+// collide() trying the cached leaf pair first. The cached pair is used only if
+// the cache holds the same trees and depths in this argument order and both
+// boxes are still occupied; it then costs one box test and, if the two boxes
+// still overlap, proves the hit by itself (it is a real occupied leaf pair, so
+// never a false hit). Otherwise the full descent runs as in collide() (its
+// box tests added to the one spent). The cache ends up holding the proving
+// leaf pair of a hit, or empty after a miss. The hit is always collide()'s;
+// box_tests and leaf may differ (another overlapping leaf pair may prove it).
+PairTest collide(const PlacedTree& a, const PlacedTree& b, PairCache& cache);
+
 // Every overlapping leaf pair (no early out), for response and debugging.
 PairTest collide_all(const PlacedTree& a, const PlacedTree& b, std::vector<LeafPair>& out);
+
+// ---- Reference implementation: for tests and benchmarks only -------------
+// The plain scalar descent this library shipped before: both trees split at
+// once, child pairs in fixed octant order, one scalar separating axis test per
+// box pair, same padding. Same hits (and for collide_all_reference the same
+// leaf pairs) as collide / collide_all; box_tests and the proving leaf pair
+// differ. Kept beside the fast path to check it and to measure it against.
+PairTest collide_reference(const PlacedTree& a, const PlacedTree& b);
+PairTest collide_all_reference(const PlacedTree& a, const PlacedTree& b, std::vector<LeafPair>& out);
+
+// Tests and benchmarks only: which build of the box-test kernel collide() and
+// collide_all() run, process-wide (best: the widest the CPU has). All builds
+// give identical bits. Returns false, changing nothing, if the CPU lacks it.
+enum class BoxKernel { best, portable, avx2, avx512 };
+bool use_box_kernel(BoxKernel kernel);
 
 }  // namespace octbake

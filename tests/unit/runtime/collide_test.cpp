@@ -107,14 +107,31 @@ TEST(Collide, RootsOnlyCountOneTest) {
 }
 
 TEST(Collide, FirstLeafPairEndsTheDescent) {
-  // Identical full trees at the same pose: the first pair of every 64 overlaps.
+  // Identical full trees at the same pose: the trees split in turn, all 8
+  // children of each split are tested, and the first leaf pair ends it.
   const ObjectTree t = full_tree(kUnit, 3);
   const PairTest r = collide({&t, at({0, 0, 0}), 3}, {&t, at({0, 0, 0}), 3});
   EXPECT_TRUE(r.hit);
-  EXPECT_EQ(r.box_tests, 4u);  // root, then one pair per depth
+  EXPECT_EQ(r.box_tests, 1u + 6 * 8);  // root, then 3 splits per tree
   const PairTest one_side = collide({&t, at({0, 0, 0}), 0}, {&t, at({0, 0, 0}), 2});
   EXPECT_TRUE(one_side.hit);
-  EXPECT_EQ(one_side.box_tests, 3u);
+  EXPECT_EQ(one_side.box_tests, 1u + 2 * 8);
+  // The reference splits both at once and tests one pair at a time.
+  EXPECT_EQ(collide_reference({&t, at({0, 0, 0}), 3}, {&t, at({0, 0, 0}), 3}).box_tests, 4u);
+}
+
+TEST(Collide, LargerBoxSplitsFirst) {
+  // B is 64 times smaller than A: A splits to its leaves before B splits,
+  // so with B inside one of A's boxes each split has one overlapping child.
+  const ObjectTree t = full_tree(kUnit, 4);
+  const PlacedTree a{&t, at({0, 0, 0}), 4};
+  const PlacedTree b{&t, at({0.26, 0.26, 0.26}, Eigen::Quaterniond::Identity(), 1.0 / 64), 4};
+  const PairTest r = collide(a, b);
+  EXPECT_TRUE(r.hit);
+  // Root, 4 splits of A (8 each), then B's root lies inside A's leaf: proved.
+  EXPECT_EQ(r.box_tests, 1u + 4 * 8 + 1);
+  EXPECT_EQ(collide(b, a).box_tests, r.box_tests);
+  EXPECT_TRUE(collide_reference(a, b).hit);
 }
 
 TEST(Collide, AxisAlignedFacesTouchAtEveryDepth) {
@@ -141,7 +158,7 @@ TEST(Collide, SparseTreesTouchOnlyWhereBoxesAre) {
   // B moved by (0.5, 0, 0): the roots overlap, the kept octants are 0.5 apart.
   const PairTest r = collide({&a, at({0, 0, 0}), 1}, {&b, at({0.5, 0, 0}), 1});
   EXPECT_FALSE(r.hit);
-  EXPECT_EQ(r.box_tests, 2u);
+  EXPECT_EQ(r.box_tests, 3u);  // roots, A's one child, B's one child
   EXPECT_TRUE(collide({&a, at({0, 0, 0}), 0}, {&b, at({0.5, 0, 0}), 1}).hit);
 }
 
@@ -224,6 +241,12 @@ TEST(Collide, AllLeafPairsMatchBruteForce) {
     EXPECT_EQ(ab.hit, ba.hit);
     EXPECT_EQ(ab.box_tests, ba.box_tests);
     EXPECT_LE(ab.box_tests, all.box_tests);
+    if (ab.hit) {
+      // The proving leaf pair is one of the overlapping ones, in argument
+      // order, and the same pair whichever order the arguments come in.
+      EXPECT_TRUE(std::binary_search(expected.begin(), expected.end(), ab.leaf, by_key)) << "run " << run;
+      EXPECT_EQ(key(ab.leaf), key(LeafPair{ba.leaf.b, ba.leaf.a}));
+    }
     hits += ab.hit;
     ++runs;
   }

@@ -1,0 +1,163 @@
+// The fast descent against the plain scalar reference kept beside it: on
+// random trees and poses (sizes up to 1000x apart, flat trees, far offsets)
+// the same hit at every depth pair and, from collide_all, the same set of
+// overlapping leaf pairs; and every build of the box-test kernel the CPU has
+// gives identical results, counts included.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+#include <tuple>
+
+#include "octbake/collide.h"
+
+#include "seeded_random.h"
+
+namespace octbake {
+namespace {
+
+using test::random_rotation;
+using test::uniform01;
+
+#if defined(__SANITIZE_ADDRESS__) || !defined(NDEBUG)
+constexpr int kRuns = 40;
+#else
+constexpr int kRuns = 300;
+#endif
+
+// Each child present with probability 3/4 (a box may end up with none); one
+// in eight trees is flat (zero thickness in z).
+ObjectTree random_tree(std::mt19937& rng, int depth) {
+  std::vector<std::vector<uint8_t>> masks;
+  uint64_t boxes = 1;
+  for (int d = 0; d < depth; ++d) {
+    std::vector<uint8_t> level(boxes);
+    boxes = 0;
+    for (auto& m : level) {
+      m = uint8_t((rng() | rng()) & 0xFF);
+      boxes += std::popcount(m);
+    }
+    masks.push_back(std::move(level));
+  }
+  Eigen::Vector3d size(0.5 + uniform01(rng), 0.5 + uniform01(rng), 0.5 + uniform01(rng));
+  if (rng() % 8 == 0) size.z() = 0;
+  const Eigen::Vector3d lo = -0.5 * size + 0.2 * Eigen::Vector3d(uniform01(rng), uniform01(rng), uniform01(rng));
+  OctreeMasks m{{lo, lo + size}, std::move(masks)};
+  TreeInfo info;
+  info.bounds = m.bounds;
+  info.depth = m.depth();
+  return ObjectTree(std::move(info), std::move(m));
+}
+
+auto key(const LeafPair& p) { return std::tuple(p.a.x, p.a.y, p.a.z, p.b.x, p.b.y, p.b.z); }
+
+std::vector<LeafPair> sorted(std::vector<LeafPair> v) {
+  std::sort(v.begin(), v.end(), [](const LeafPair& x, const LeafPair& y) { return key(x) < key(y); });
+  return v;
+}
+
+// A random pair: B's size 1/1000..1 of A's (log-uniform), placed so that
+// about half the pairs touch; far from the origin one time in four.
+std::pair<Pose, Pose> random_poses(std::mt19937& rng) {
+  Pose a, b;
+  const Eigen::Vector3d base = rng() % 4 == 0 ? Eigen::Vector3d(1e7, -1e7, 1e7) : Eigen::Vector3d(0, 0, 0);
+  a.rotation = random_rotation(rng);
+  b.rotation = random_rotation(rng);
+  a.scale = 0.5 + uniform01(rng);
+  b.scale = a.scale * std::pow(1000.0, -uniform01(rng));
+  a.position = base;
+  // Small ones go near A's boundary (where the trees decide), large ones anywhere close.
+  const Eigen::Vector3d dir = random_rotation(rng) * Eigen::Vector3d::UnitX();
+  b.position = base + a.scale * (0.3 + 0.6 * uniform01(rng)) * dir;
+  return {a, b};
+}
+
+TEST(CollideReference, SameHitsAndLeafPairsAtEveryDepthPair) {
+  std::mt19937 rng(31);
+  int hits = 0, cases = 0;
+  for (int run = 0; run < kRuns; ++run) {
+    const int depth_a = 1 + int(rng() % 4), depth_b = 1 + int(rng() % 4);
+    const ObjectTree ta = random_tree(rng, depth_a), tb = random_tree(rng, depth_b);
+    const auto [pa, pb] = random_poses(rng);
+    for (int da = 0; da <= depth_a; ++da)
+      for (int db = 0; db <= depth_b; ++db) {
+        const PlacedTree a{&ta, pa, da}, b{&tb, pb, db};
+        const PairTest fast = collide(a, b), ref = collide_reference(a, b);
+        ASSERT_EQ(fast.hit, ref.hit) << "run " << run << " depths " << da << "-" << db;
+        std::vector<LeafPair> all_fast, all_ref;
+        collide_all(a, b, all_fast);
+        collide_all_reference(a, b, all_ref);
+        const auto fast_set = sorted(all_fast), ref_set = sorted(all_ref);
+        ASSERT_EQ(fast_set.size(), ref_set.size()) << "run " << run << " depths " << da << "-" << db;
+        for (size_t i = 0; i < fast_set.size(); ++i) ASSERT_EQ(key(fast_set[i]), key(ref_set[i]));
+        hits += fast.hit;
+        ++cases;
+      }
+  }
+  EXPECT_GT(hits, cases * 3 / 10) << "of " << cases;
+  EXPECT_LT(hits, cases * 7 / 10) << "of " << cases;
+}
+
+TEST(CollideReference, EveryKernelBuildGivesTheSameBits) {
+  std::vector<BoxKernel> kernels;
+  for (const BoxKernel k : {BoxKernel::portable, BoxKernel::avx2, BoxKernel::avx512})
+    if (use_box_kernel(k)) kernels.push_back(k);
+  ASSERT_TRUE(use_box_kernel(BoxKernel::best));
+  ASSERT_FALSE(kernels.empty());
+  std::mt19937 rng(32);
+  int hits = 0;
+  for (int run = 0; run < kRuns; ++run) {
+    const int depth_a = 1 + int(rng() % 4), depth_b = 1 + int(rng() % 4);
+    const ObjectTree ta = random_tree(rng, depth_a), tb = random_tree(rng, depth_b);
+    const auto [pa, pb] = random_poses(rng);
+    const PlacedTree a{&ta, pa, depth_a}, b{&tb, pb, depth_b};
+    std::vector<PairTest> results;
+    std::vector<std::vector<LeafPair>> leaves;
+    for (const BoxKernel k : kernels) {
+      ASSERT_TRUE(use_box_kernel(k));
+      results.push_back(collide(a, b));
+      leaves.emplace_back();
+      collide_all(a, b, leaves.back());
+    }
+    ASSERT_TRUE(use_box_kernel(BoxKernel::best));
+    for (size_t k = 1; k < results.size(); ++k) {
+      ASSERT_EQ(results[k].hit, results[0].hit) << "run " << run;
+      ASSERT_EQ(results[k].box_tests, results[0].box_tests) << "run " << run;
+      ASSERT_EQ(key(results[k].leaf), key(results[0].leaf)) << "run " << run;
+      ASSERT_EQ(leaves[k].size(), leaves[0].size()) << "run " << run;
+      for (size_t i = 0; i < leaves[k].size(); ++i) ASSERT_EQ(key(leaves[k][i]), key(leaves[0][i]));  // same order
+    }
+    hits += results[0].hit;
+  }
+  EXPECT_GT(hits, kRuns * 3 / 10);
+  EXPECT_LT(hits, kRuns * 7 / 10);
+}
+
+// A small object against a large one: the larger tree splits first, so the
+// fast descent needs far fewer box tests than the simultaneous one.
+TEST(CollideReference, SmallAgainstLargeTakesFewerBoxTests) {
+  std::mt19937 rng(33);
+  uint64_t fast_tests = 0, ref_tests = 0;
+  int hits = 0;
+  const int runs = kRuns / 2;
+  for (int run = 0; run < runs; ++run) {
+    const ObjectTree large = random_tree(rng, 5), small = random_tree(rng, 5);
+    Pose pa, pb;
+    pa.rotation = random_rotation(rng);
+    pb.rotation = random_rotation(rng);
+    pb.scale = 1.0 / 400;
+    pb.position = 0.6 * Eigen::Vector3d(uniform01(rng) - 0.5, uniform01(rng) - 0.5, uniform01(rng) - 0.5);
+    const PlacedTree a{&large, pa, 5}, b{&small, pb, 5};
+    const PairTest fast = collide(a, b), ref = collide_reference(a, b);
+    ASSERT_EQ(fast.hit, ref.hit) << "run " << run;
+    if (!fast.hit) continue;
+    ++hits;
+    fast_tests += fast.box_tests;
+    ref_tests += ref.box_tests;
+  }
+  ASSERT_GT(hits, 10) << "of " << runs;  // sparse random trees: a tiny object often falls in a gap
+  EXPECT_LT(5 * fast_tests, ref_tests) << fast_tests << " vs " << ref_tests << " box tests over " << hits << " hits";
+}
+
+}  // namespace
+}  // namespace octbake
