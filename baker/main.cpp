@@ -9,6 +9,7 @@
 
 #include "bake.h"
 #include "cli.h"
+#include "for_scene.h"
 
 int main(int argc, char** argv) {
   using namespace octbake;
@@ -41,6 +42,8 @@ int main(int argc, char** argv) {
   app.add_option("--info", info_files, "Print what baked files hold and exit");
   app.add_option("--export-obj", config.export_obj_dir, "Also write each tree's boxes per depth as DIR/<stem>_d<depth>.obj");
   app.add_flag("-q,--quiet", quiet, "No progress display");
+  std::string for_scene;
+  app.add_option("--for-scene", for_scene, "Bake only the FILEs whose model SCENE.json names, each to the depth its run needs");
 
   try {
     app.parse(argc, argv);
@@ -66,6 +69,7 @@ int main(int argc, char** argv) {
   config.options.occupancy = *parse_occupancy(occupancy);
   std::tie(config.options.compression, config.options.compression_level) = *parse_compression(compress);
   config.progress = !quiet && ::isatty(STDERR_FILENO);
+  if (!for_scene.empty()) return bake_for_scene(for_scene, config, stderr);
   const BakeSummary summary = run_bake(config, stderr);
   return summary.failed == 0 ? 0 : 1;
 }

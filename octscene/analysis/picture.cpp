@@ -10,6 +10,7 @@
 #include <numbers>
 #include <optional>
 
+#include "cli_util.h"
 #include "exact.h"
 #include "octbake/baked_file.h"
 #include "run.h"
@@ -212,6 +213,11 @@ struct SceneArgs {
 int picture_scene(const SceneArgs& a) {
   auto scene = load_scene(a.scene);
   if (!scene) return fail(a.scene, scene.error());
+  if (a.frame >= scene->frames) {
+    std::fprintf(stderr, "octscene: error: --frame %lld: past the scene's end (%s has frames 0..%lld)\n",
+                 static_cast<long long>(a.frame), a.scene.c_str(), static_cast<long long>(scene->frames) - 1);
+    return 2;
+  }
   auto library = ModelLibrary::open(scene->baked);
   if (!library) return fail(scene->baked, library.error());
   auto models = load_scene_models(*scene, *library, a.lod.max_depth);
@@ -275,7 +281,7 @@ int picture_main(int argc, char** argv) {
   SceneArgs s;
   CLI::App* sc = app.add_subcommand("scene", "a scene frame from its camera, objects tinted by LOD depth");
   sc->add_option("scene", s.scene, "scene JSON")->required();
-  sc->add_option("--frame", s.frame, "frame to draw")->check(CLI::NonNegativeNumber);
+  sc->add_option("--frame", s.frame, "frame to draw (0 .. the scene's frames - 1)")->check(CLI::Range(int64_t{0}, kMaxFrames));
   sc->add_option("--out", s.out, "PNG to write")->required();
   sc->add_option("--meshes", s.meshes, "folder of the source meshes");
   const std::map<std::string, LodPolicy> policies{
@@ -292,7 +298,10 @@ int picture_main(int argc, char** argv) {
   try {
     app.parse(argc, argv);  // argv[0] is the subcommand name, skipped like a program name
   } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
+    const char* command = tree->parsed() ? "octscene picture tree"
+                          : sc->parsed() ? "octscene picture scene"
+                                         : "octscene picture";
+    return parse_error_exit(app, e, command);
   }
   return tree->parsed() ? picture_tree(t) : picture_scene(s);
 }

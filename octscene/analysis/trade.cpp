@@ -9,9 +9,11 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
+#include "cli_util.h"
 #include "exact.h"
 #include "run.h"
 #include "write.h"
@@ -215,9 +217,73 @@ const char* policy_color(LodPolicy p) {
   return "#000";
 }
 
+// Shortest text of a double for SVG attributes (locale independent).
+std::string num(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.1f", v);
+  return buf;
+}
+
+struct Box {
+  double x0, y0, x1, y1;
+  bool overlaps(const Box& o) const { return x0 < o.x1 && o.x0 < x1 && y0 < o.y1 && o.y0 < y1; }
+  bool inside(const Box& o) const { return x0 >= o.x0 && x1 <= o.x1 && y0 >= o.y0 && y1 <= o.y1; }
+};
+
+// Places each point's label where it overlaps no other label, no point and
+// stays inside `area`: next to the point first, then further up or down with
+// a leader line. Greedy, in row order; deterministic.
+struct LabelPlacer {
+  Box area;
+  std::vector<Box> taken;  // points and placed labels
+
+  // Returns the label's box; `leader` is set when it sits away from the point.
+  Box place(double px, double py, double w, double h, bool* leader) {
+    const double gap = 6;
+    std::vector<std::pair<double, double>> corners;  // top-left candidates, nearest first
+    corners.push_back({px + gap, py - h / 2});         // right
+    corners.push_back({px - gap - w, py - h / 2});     // left
+    corners.push_back({px - w / 2, py - gap - h});     // above
+    corners.push_back({px - w / 2, py + gap});         // below
+    corners.push_back({px + gap, py - gap - h});       // upper right
+    corners.push_back({px + gap, py + gap});           // lower right
+    corners.push_back({px - gap - w, py - gap - h});   // upper left
+    corners.push_back({px - gap - w, py + gap});       // lower left
+    const size_t near = corners.size();
+    for (int k = 1; k <= 24; ++k)
+      for (double dir : {-1.0, 1.0})
+        for (double side : {1.0, -1.0})
+          corners.push_back({side > 0 ? px + 3 * gap : px - 3 * gap - w, py - h / 2 + dir * k * (h + 2)});
+    for (size_t i = 0; i < corners.size(); ++i) {
+      const Box b{corners[i].first, corners[i].second, corners[i].first + w, corners[i].second + h};
+      if (!b.inside(area)) continue;
+      bool free = true;
+      for (const Box& t : taken) free = free && !b.overlaps(t);
+      if (!free) continue;
+      *leader = i >= near;
+      taken.push_back(b);
+      return b;
+    }
+    // Nowhere free: right of the point, clamped into the area.
+    Box b{px + gap, py - h / 2, px + gap + w, py + h / 2};
+    const double dx = std::min(0.0, area.x1 - b.x1), dy = std::clamp(0.0, area.y0 - b.y0, area.y1 - b.y1);
+    b = {b.x0 + dx, b.y0 + dy, b.x1 + dx, b.y1 + dy};
+    *leader = false;
+    taken.push_back(b);
+    return b;
+  }
+};
+
+// Text width estimate for the sans-serif labels (a little wide, so real
+// glyphs fit in the reserved box).
+double text_width(const std::string& s, double font_size) { return 0.62 * font_size * double(s.size()); }
+
+constexpr double kLabelFont = 10;
+
 // One panel: cost (log x) against precision (linear y), a labelled point per row.
-void svg_panel(std::ostringstream& svg, double x0, const std::vector<TradeRow>& rows, bool ms, const char* title) {
-  constexpr double kW = 520, kH = 400, kLeft = 60, kRight = 20, kTop = 40, kBottom = 50;
+void svg_panel(std::ostringstream& svg, double x0, double y0, const std::vector<TradeRow>& rows, bool ms,
+               const std::string& title) {
+  constexpr double kW = 540, kH = 400, kLeft = 62, kRight = 24, kTop = 34, kBottom = 50;
   double lo = 1e300, hi = 0;
   for (const TradeRow& r : rows) {
     const double c = ms ? r.ms_per_frame : r.box_tests_per_frame;
@@ -225,46 +291,109 @@ void svg_panel(std::ostringstream& svg, double x0, const std::vector<TradeRow>& 
   }
   if (hi <= 0) lo = 1, hi = 10;
   const double dlo = std::floor(std::log10(lo)), dhi = std::max(dlo + 1, std::ceil(std::log10(hi)));
+  // Precision axis from the data's floor (in steps of 0.1) to 1.
+  double pmin = 1;
+  for (const TradeRow& r : rows) pmin = std::min(pmin, r.precision());
+  const double p0 = std::max(0.0, std::floor(pmin * 10 - 0.5) / 10);
+  const Box plot{x0 + kLeft, y0 + kTop, x0 + kW - kRight, y0 + kH - kBottom};
   auto px = [&](double c) {
     const double l = std::log10(std::max(c, std::pow(10.0, dlo)));
-    return x0 + kLeft + (l - dlo) / (dhi - dlo) * (kW - kLeft - kRight);
+    return plot.x0 + (l - dlo) / (dhi - dlo) * (plot.x1 - plot.x0);
   };
-  auto py = [&](double p) { return kTop + (1 - p) * (kH - kTop - kBottom); };
-  svg << "<text x='" << x0 + kW / 2 << "' y='22' text-anchor='middle' font-size='15'>" << title << "</text>\n";
-  svg << "<rect x='" << x0 + kLeft << "' y='" << kTop << "' width='" << kW - kLeft - kRight << "' height='"
-      << kH - kTop - kBottom << "' fill='none' stroke='#444'/>\n";
+  auto py = [&](double p) { return plot.y0 + (1 - (p - p0) / (1 - p0)) * (plot.y1 - plot.y0); };
+  svg << "<text x='" << num(x0 + kW / 2) << "' y='" << num(y0 + 20)
+      << "' text-anchor='middle' font-size='13'>" << xml_escape(title) << "</text>\n";
+  svg << "<rect x='" << num(plot.x0) << "' y='" << num(plot.y0) << "' width='" << num(plot.x1 - plot.x0)
+      << "' height='" << num(plot.y1 - plot.y0) << "' fill='none' stroke='#444'/>\n";
   for (double d = dlo; d <= dhi; ++d) {
     const double x = px(std::pow(10.0, d));
-    svg << "<line x1='" << x << "' y1='" << kTop << "' x2='" << x << "' y2='" << kH - kBottom
-        << "' stroke='#ddd'/><text x='" << x << "' y='" << kH - kBottom + 16
-        << "' text-anchor='middle' font-size='11'>1e" << d << "</text>\n";
+    svg << "<line x1='" << num(x) << "' y1='" << num(plot.y0) << "' x2='" << num(x) << "' y2='" << num(plot.y1)
+        << "' stroke='#ddd'/><text x='" << num(x) << "' y='" << num(plot.y1 + 16)
+        << "' text-anchor='middle' font-size='11'>" << std::pow(10.0, d) << "</text>\n";
   }
-  for (int k = 0; k <= 4; ++k) {
-    const double y = py(k / 4.0);
-    svg << "<line x1='" << x0 + kLeft << "' y1='" << y << "' x2='" << x0 + kW - kRight << "' y2='" << y
-        << "' stroke='#ddd'/><text x='" << x0 + kLeft - 6 << "' y='" << y + 4
-        << "' text-anchor='end' font-size='11'>" << k / 4.0 << "</text>\n";
+  const int steps = static_cast<int>(std::lround((1 - p0) * 10));
+  for (int k = 0; k <= steps; ++k) {
+    const double p = p0 + k / 10.0, y = py(p);
+    char tick[8];
+    std::snprintf(tick, sizeof tick, "%.1f", p);
+    svg << "<line x1='" << num(plot.x0) << "' y1='" << num(y) << "' x2='" << num(plot.x1) << "' y2='" << num(y)
+        << "' stroke='#ddd'/><text x='" << num(plot.x0 - 6) << "' y='" << num(y + 4)
+        << "' text-anchor='end' font-size='11'>" << tick << "</text>\n";
   }
-  svg << "<text x='" << x0 + (kW + kLeft - kRight) / 2 << "' y='" << kH - 12 << "' text-anchor='middle' font-size='12'>"
-      << (ms ? "ms per frame (World::step, log)" : "box tests per frame (log)") << "</text>\n";
-  svg << "<text x='" << x0 + 16 << "' y='" << (kTop + kH - kBottom) / 2 << "' font-size='12' transform='rotate(-90 "
-      << x0 + 16 << ' ' << (kTop + kH - kBottom) / 2 << ")' text-anchor='middle'>precision</text>\n";
+  svg << "<text x='" << num((plot.x0 + plot.x1) / 2) << "' y='" << num(y0 + kH - 14)
+      << "' text-anchor='middle' font-size='12'>"
+      << (ms ? "ms per frame, World::step (log scale)" : "box tests per frame (log scale)") << "</text>\n";
+  const double mid = (plot.y0 + plot.y1) / 2;
+  svg << "<text x='" << num(x0 + 18) << "' y='" << num(mid) << "' font-size='12' transform='rotate(-90 "
+      << num(x0 + 18) << ' ' << num(mid) << ")' text-anchor='middle'>precision</text>\n";
+
+  LabelPlacer placer{{plot.x0 + 2, plot.y0 + 2, plot.x1 - 2, plot.y1 - 2}, {}};
+  std::vector<std::pair<double, double>> points;
   for (const TradeRow& r : rows) {
-    const double x = px(ms ? r.ms_per_frame : r.box_tests_per_frame), y = py(r.precision());
-    svg << "<circle cx='" << x << "' cy='" << y << "' r='4' fill='" << policy_color(r.lod.policy) << "'/>"
-        << "<text x='" << x + 6 << "' y='" << y - 5 << "' font-size='10'>" << xml_escape(r.label) << "</text>\n";
+    points.push_back({px(ms ? r.ms_per_frame : r.box_tests_per_frame), py(r.precision())});
+    placer.taken.push_back({points.back().first - 5, points.back().second - 5, points.back().first + 5,
+                            points.back().second + 5});
+  }
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const auto [x, y] = points[i];
+    svg << "<circle cx='" << num(x) << "' cy='" << num(y) << "' r='4' fill='" << policy_color(rows[i].lod.policy)
+        << "'/>\n";
+  }
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const auto [x, y] = points[i];
+    bool leader = false;
+    const double w = text_width(rows[i].label, kLabelFont), h = kLabelFont + 2;
+    const Box b = placer.place(x, y, w, h, &leader);
+    if (leader) {
+      const double lx = b.x0 > x ? b.x0 - 1 : b.x1 + 1;
+      svg << "<line x1='" << num(x) << "' y1='" << num(y) << "' x2='" << num(lx) << "' y2='"
+          << num((b.y0 + b.y1) / 2) << "' stroke='#999' stroke-width='0.7'/>\n";
+    }
+    svg << "<text class='label' x='" << num(b.x0) << "' y='" << num(b.y1 - 3) << "' font-size='" << kLabelFont
+        << "'>" << xml_escape(rows[i].label) << "</text>\n";
   }
 }
 
-std::string svg_plot(const TradeReport& report, const std::string& scene_name) {
+}  // namespace
+
+std::string trade_svg(const TradeReport& report, const std::string& scene_name) {
+  constexpr double kWidth = 1080, kPanelTop = 58, kLegend = 30, kHeight = kPanelTop + 400 + kLegend;
+  double recall_min = 1;
+  uint64_t false_negatives = 0;
+  for (const TradeRow& r : report.rows) recall_min = std::min(recall_min, r.recall()), false_negatives += r.false_negatives;
+  char title[256];
+  std::snprintf(title, sizeof title, "%zu LOD settings over %lld frames, %llu exact contacts: %s",
+                report.rows.size(), static_cast<long long>(report.frames),
+                static_cast<unsigned long long>(report.exact_contacts),
+                false_negatives == 0 ? "recall 1 in every setting"
+                                     : ("lowest recall " + std::to_string(recall_min)).c_str());
   std::ostringstream svg;
-  svg << "<svg xmlns='http://www.w3.org/2000/svg' width='1040' height='400' font-family='sans-serif'>\n"
-      << "<rect width='1040' height='400' fill='white'/>\n";
-  svg_panel(svg, 0, report.rows, /*ms=*/false, ("cost vs precision: " + xml_escape(scene_name)).c_str());
-  svg_panel(svg, 520, report.rows, /*ms=*/true, "time vs precision (recall is 1 for all)");
+  svg << "<svg xmlns='http://www.w3.org/2000/svg' width='" << kWidth << "' height='" << kHeight
+      << "' font-family='sans-serif'>\n"
+      << "<rect width='" << kWidth << "' height='" << kHeight << "' fill='white'/>\n";
+  svg << "<text x='" << kWidth / 2 << "' y='22' text-anchor='middle' font-size='16'>"
+      << xml_escape(scene_name + ": cost against precision") << "</text>\n";
+  svg << "<text x='" << kWidth / 2 << "' y='42' text-anchor='middle' font-size='12' fill='#333'>" << xml_escape(title)
+      << "</text>\n";
+  svg_panel(svg, 0, kPanelTop, report.rows, /*ms=*/false, "box tests");
+  svg_panel(svg, kWidth / 2, kPanelTop, report.rows, /*ms=*/true, "time");
+  // Legend: one swatch per policy present.
+  const std::pair<LodPolicy, std::string> entries[] = {
+      {LodPolicy::fixed, "fixed depth"}, {LodPolicy::thesis, "thesis formula"}, {LodPolicy::screen, "screen tolerance"}};
+  double legend_width = 0;
+  for (const auto& [p, name] : entries) legend_width += 10 + text_width(name, 12) + 24;
+  double x = (kWidth - legend_width) / 2;
+  const double y = kPanelTop + 400 + 14;
+  for (const auto& [p, name] : entries) {
+    svg << "<g class='legend'><circle cx='" << num(x) << "' cy='" << num(y) << "' r='5' fill='" << policy_color(p)
+        << "'/><text x='" << num(x + 10) << "' y='" << num(y + 4) << "' font-size='12'>" << name << "</text></g>\n";
+    x += 10 + text_width(name, 12) + 24;
+  }
   svg << "</svg>\n";
   return svg.str();
 }
+
+namespace {
 
 std::string csv_text(const TradeReport& report) {
   std::ostringstream csv;
@@ -294,7 +423,8 @@ int trade_main(int argc, char** argv) {
   TradeOptions options;
   app.add_option("scene", scene_path, "scene JSON")->required();
   app.add_option("--meshes", options.meshes, "folder of the source meshes (model x -> DIR/x.obj, .ply, ...)");
-  app.add_option("--frames", options.frames, "frames to run (default: the scene's)");
+  app.add_option("--frames", options.frames, "frames to run (default: the scene's)")
+      ->check(CLI::Range(int64_t{0}, kMaxFrames));
   app.add_option("--max-depth", options.max_depth, "deepest depth tried (default: baked depth, at most 8)")
       ->check(CLI::Range(1, 12));
   app.add_option("--plot", plot_path, "write an SVG of cost against precision");
@@ -302,7 +432,7 @@ int trade_main(int argc, char** argv) {
   try {
     app.parse(argc, argv);  // argv[0] is the subcommand name, skipped like a program name
   } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
+    return parse_error_exit(app, e, "octscene trade");
   }
   std::setvbuf(stdout, nullptr, _IOLBF, 0);
 
@@ -346,7 +476,7 @@ int trade_main(int argc, char** argv) {
     std::fprintf(stderr, "octscene: error: %s: cannot write\n", csv_path.c_str());
     return 1;
   }
-  if (!plot_path.empty() && !write_text(plot_path, svg_plot(*report, scene_path))) {
+  if (!plot_path.empty() && !write_text(plot_path, trade_svg(*report, std::filesystem::path(scene_path).filename().string()))) {
     std::fprintf(stderr, "octscene: error: %s: cannot write\n", plot_path.c_str());
     return 1;
   }

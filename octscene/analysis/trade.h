@@ -55,4 +55,10 @@ struct TradeReport {
 
 Result<TradeReport> run_trade(const Scene& scene, ModelLibrary& library, const TradeOptions& options);
 
+// The --plot SVG: cost (box tests, and time) per frame on a log axis against
+// precision, one point per setting coloured by policy, with a legend, a title
+// computed from the report, and labels placed so none overlaps another label
+// or a point, and none leaves its plot (labels are class='label' text).
+std::string trade_svg(const TradeReport& report, const std::string& scene_name);
+
 }  // namespace octbake::scene
