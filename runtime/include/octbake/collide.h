@@ -48,7 +48,7 @@
 // so hit, box_tests and leaf (mapped back to the caller's order) do not depend
 // on argument order. Deterministic: the same inputs give the same counts.
 // Preconditions (asserted): depth in 0..min(tree->loaded_depth(), 12), finite
-// pose, scale > 0, unit rotation. No heap allocation (about 60 KB of stack).
+// pose, scale > 0, unit rotation. No heap allocation (about 40 KB of stack).
 #pragma once
 #include <cstdint>
 #include <vector>

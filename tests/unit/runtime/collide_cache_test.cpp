@@ -16,7 +16,7 @@ using test::random_rotation;
 using test::uniform01;
 
 #if defined(__SANITIZE_ADDRESS__) || !defined(NDEBUG)
-constexpr int kSequences = 15;
+constexpr int kSequences = 40;
 #else
 constexpr int kSequences = 120;
 #endif
