@@ -5,6 +5,8 @@
 #include <cassert>
 #include <cmath>
 #include <condition_variable>
+#include <cstring>
+#include <type_traits>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -59,6 +61,15 @@ int depth_for(const LodSettings& s, double area, double a_min, double a_max, int
     case LodPolicy::screen: return screen_depth(area, lo, hi, s.pixel_tolerance);
   }
   return hi;
+}
+
+// Bitwise equality (0.0 and -0.0 differ): "unchanged" must mean unchanged.
+template <class T>
+bool same_bits(const T& a, const T& b) {
+  if constexpr (std::is_floating_point_v<T>)
+    return std::memcmp(&a, &b, sizeof a) == 0;
+  else
+    return std::memcmp(a.data(), b.data(), sizeof(double) * size_t(a.size())) == 0;
 }
 
 double max_abs(const Eigen::Vector3d& v) { return v.cwiseAbs().maxCoeff(); }
@@ -251,12 +262,13 @@ int CollisionWorld::max_depth_of(const Slot& s) const {
   return std::min(s.source.tree->loaded_depth(), kMaxTreeDepth);
 }
 
-void CollisionWorld::place_box(Slot& s) {
+void CollisionWorld::place_box(uint32_t i) {
+  const Slot& s = slots_[i];
   const Eigen::Vector3d& p = s.pose.position;
   const Aabb& off = s.offset;
   const double pad = kRelativePad * (max_abs(p) + std::max(max_abs(off.min), max_abs(off.max)));
-  s.box.min = (p + off.min).array() - pad;
-  s.box.max = (p + off.max).array() + pad;
+  boxes_[i].min = (p + off.min).array() - pad;
+  boxes_[i].max = (p + off.max).array() + pad;
 }
 
 Result<ObjectHandle> CollisionWorld::create(TreeSource source, const Pose& pose) {
@@ -277,6 +289,7 @@ Result<ObjectHandle> CollisionWorld::create(TreeSource source, const Pose& pose)
     i = uint32_t(slots_.size());
     slots_.emplace_back();
     cell_changed_.push_back(0);
+    boxes_.emplace_back();
   }
   Slot& s = slots_[i];
   const uint32_t generation = s.generation + 1 == 0 ? 1 : s.generation + 1;
@@ -288,7 +301,7 @@ Result<ObjectHandle> CollisionWorld::create(TreeSource source, const Pose& pose)
   Pose at_origin = pose;
   at_origin.position.setZero();
   s.offset = world_bounds(place(tree_of(s).bounds(), at_origin));
-  place_box(s);
+  place_box(i);
   s.tree_dirty = true;
   dirty_.push_back(i);
   cell_changed_[i] = 1;
@@ -311,21 +324,25 @@ Status CollisionWorld::destroy(ObjectHandle h) {
 
 Status CollisionWorld::set_pose(ObjectHandle h, const Pose& pose) {
   if (Status st = check(h); !st) return st;
-  if (Status st = check_pose(pose); !st) return st;
   Slot& s = slots_[h.slot];
-  if (!(pose.rotation.coeffs() == s.pose.rotation.coeffs()) || pose.scale != s.pose.scale) {
+  const bool same_frame = same_bits(pose.rotation.coeffs(), s.pose.rotation.coeffs()) && same_bits(pose.scale, s.pose.scale);
+  // An app that sets every pose every frame pays almost nothing for the
+  // objects that did not move (their pose was checked when it was set).
+  if (same_frame && same_bits(pose.position, s.pose.position)) return std::monostate{};
+  if (Status st = check_pose(pose); !st) return st;
+  if (!same_frame) {
     Pose at_origin = pose;
     at_origin.position.setZero();
     s.offset = world_bounds(place(tree_of(s).bounds(), at_origin));
   }
   s.pose = pose;
-  place_box(s);
+  place_box(h.slot);
   if (!s.tree_dirty) {
     s.tree_dirty = true;
     dirty_.push_back(h.slot);
   }
   if (settings_.area_refresh == AreaRefresh::on_demand) {
-    s.area_fresh = false;
+    s.area_epoch = 0;
     any_stale_area_ = true;
   }
   return std::monostate{};
@@ -336,11 +353,10 @@ Result<Pose> CollisionWorld::pose(ObjectHandle h) const {
   return slots_[h.slot].pose;
 }
 
+// O(1): a new epoch makes every area stale (set_camera runs every frame).
 void CollisionWorld::invalidate_all_areas() {
-  for (size_t i = 0; i < slots_.size(); ++i) {
-    slots_[i].area_fresh = false;
-    cell_changed_[i] = 1;
-  }
+  ++epoch_;
+  legacy_all_ = true;
   any_stale_area_ = true;
 }
 
@@ -361,7 +377,7 @@ Status CollisionWorld::set_lod(const LodSettings& lod) {
 uint64_t CollisionWorld::refresh_depth(uint32_t i) {
   if (settings_.lod.policy == LodPolicy::thesis) return refresh_all_thesis();
   Slot& s = slots_[i];
-  if (s.area_fresh) return 0;
+  if (s.area_epoch == epoch_) return 0;
   uint64_t computed = 0;
   // The fixed policy does not look at the area: it is not computed.
   if (settings_.lod.policy != LodPolicy::fixed) {
@@ -369,7 +385,7 @@ uint64_t CollisionWorld::refresh_depth(uint32_t i) {
     computed = 1;
   }
   s.depth = depth_for(settings_.lod, s.area, 0, 0, max_depth_of(s));
-  s.area_fresh = true;
+  s.area_epoch = epoch_;
   return computed;
 }
 
@@ -379,9 +395,9 @@ uint64_t CollisionWorld::refresh_all_thesis() {
   double a_min = std::numeric_limits<double>::infinity(), a_max = -a_min;
   for (Slot& s : slots_) {
     if (!s.live) continue;
-    if (!s.area_fresh) {
+    if (s.area_epoch != epoch_) {
       s.area = pixel_area(settings_.camera, place(tree_of(s).bounds(), s.pose));
-      s.area_fresh = true;
+      s.area_epoch = epoch_;
       ++computed;
     }
     a_min = std::min(a_min, s.area);
@@ -396,13 +412,15 @@ uint64_t CollisionWorld::refresh_all_thesis() {
 // The historic World rule: recompute the stale (or all) areas now; depths of
 // the recomputed objects, or of every object when thesis or `all`.
 uint64_t CollisionWorld::refresh_legacy(bool all) {
+  all = all || legacy_all_;  // the camera or the LOD changed
+  legacy_all_ = false;
   uint64_t computed = 0;
   for (uint32_t i = 0; i < slots_.size(); ++i) {
     Slot& s = slots_[i];
     if (!s.live || (!all && !cell_changed_[i])) continue;
     s.area = pixel_area(settings_.camera, place(tree_of(s).bounds(), s.pose));
     cell_changed_[i] = 0;
-    s.area_fresh = true;  // marker for the depth pass below
+    s.area_epoch = epoch_;  // marks "recomputed now" for the depth pass below
     ++computed;
   }
   if (computed == 0) return 0;
@@ -414,9 +432,9 @@ uint64_t CollisionWorld::refresh_legacy(bool all) {
       if (s.live) a_min = std::min(a_min, s.area), a_max = std::max(a_max, s.area);
   }
   for (Slot& s : slots_) {
-    if (!s.live || !(every || s.area_fresh)) continue;
+    if (!s.live || !(every || s.area_epoch == epoch_)) continue;
     s.depth = std::clamp(depth_for(settings_.lod, s.area, a_min, a_max, max_depth_of(s)), 0, max_depth_of(s));
-    s.area_fresh = false;  // in the legacy modes area_fresh only marks "recomputed in this call"
+    s.area_epoch = 0;
   }
   return computed;
 }
@@ -464,7 +482,7 @@ void CollisionWorld::commit_poses() {
     Slot& s = slots_[i];
     if (!s.live || !s.tree_dirty) continue;
     s.tree_dirty = false;
-    if (tree_.update(i, s.box)) cell_changed_[i] = 1;
+    if (tree_.update(i, boxes_[i])) cell_changed_[i] = 1;
   }
   dirty_.clear();
 }
@@ -485,7 +503,7 @@ DetectStats CollisionWorld::detect(std::vector<Contact>& out) {
   tree_.candidate_pairs(pairs_);
   size_t n = 0;
   for (const auto& p : pairs_)
-    if (overlaps(slots_[p.first].box, slots_[p.second].box)) pairs_[n++] = p;
+    if (overlaps(boxes_[p.first], boxes_[p.second])) pairs_[n++] = p;
   pairs_.resize(n);
   stats.candidate_pairs = stats.pair_tests = n;
 
@@ -529,7 +547,7 @@ DetectStats CollisionWorld::detect(std::vector<Contact>& out) {
       const int held = s.source.cache->held_depth(s.source.id);
       if (s.depth > held) {
         s.depth = held;
-        s.area_fresh = false;  // ask again next frame
+        s.area_epoch = 0;  // ask again next frame
         ++stats.depth_clamps;
       }
     }
@@ -586,7 +604,7 @@ Result<std::optional<RayHit>> CollisionWorld::ray_cast(const Eigen::Vector3d& or
   double best_t = max_distance;
   for (uint32_t i = 0; i < slots_.size(); ++i) {
     if (!slots_[i].live) continue;
-    const double t_box = ray_box(origin, dir, slots_[i].box, 0, best_t);
+    const double t_box = ray_box(origin, dir, boxes_[i], 0, best_t);
     if (t_box < 0) continue;
     if (settings_.area_refresh == AreaRefresh::on_demand) refresh_depth(i);
     const Slot& s = slots_[i];
@@ -677,7 +695,7 @@ Status CollisionWorld::overlap_box(const Aabb& box, std::vector<ObjectHandle>& o
   if (!box.min.allFinite() || !box.max.allFinite() || !(box.min.array() <= box.max.array()).all())
     return bad("overlap_box: non-finite box or min > max");
   for (uint32_t i = 0; i < slots_.size(); ++i) {
-    if (!slots_[i].live || !overlaps(slots_[i].box, box)) continue;
+    if (!slots_[i].live || !overlaps(boxes_[i], box)) continue;
     if (settings_.area_refresh == AreaRefresh::on_demand) refresh_depth(i);
     const Slot& s = slots_[i];
     // The query box in the object's local frame.
@@ -703,7 +721,7 @@ Status CollisionWorld::overlap_sphere(const Eigen::Vector3d& center, double radi
     return bad("overlap_sphere: non-finite center or radius, or radius < 0");
   const Aabb bounds{center.array() - radius, center.array() + radius};
   for (uint32_t i = 0; i < slots_.size(); ++i) {
-    if (!slots_[i].live || !overlaps(slots_[i].box, bounds)) continue;
+    if (!slots_[i].live || !overlaps(boxes_[i], bounds)) continue;
     if (settings_.area_refresh == AreaRefresh::on_demand) refresh_depth(i);
     const Slot& s = slots_[i];
     const Eigen::Matrix3d rt = s.pose.rotation.toRotationMatrix().transpose();

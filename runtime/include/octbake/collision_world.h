@@ -194,7 +194,9 @@ class CollisionWorld {
   bool alive(ObjectHandle h) const;
   size_t size() const { return live_; }
   // Position, unit quaternion (|q| within 1e-6 of 1; stored normalized as
-  // given), uniform scale > 0. Cheap when only the position changed.
+  // given), uniform scale > 0. Cheap when only the position changed, and
+  // a no-op when nothing changed (bitwise): an app may set every pose every
+  // frame.
   Status set_pose(ObjectHandle h, const Pose& pose);
   Result<Pose> pose(ObjectHandle h) const;
 
@@ -255,7 +257,7 @@ class CollisionWorld {
   const CollisionSettings& settings() const { return settings_; }
   // The world AABB (padded) detect() pre-filters with; as of the last
   // set_pose. Precondition: alive(h).
-  const Aabb& bounds(ObjectHandle h) const { return slots_[h.slot].box; }
+  const Aabb& bounds(ObjectHandle h) const { return boxes_[h.slot]; }
   // Depth and area as last computed (no refresh). Precondition: alive(h).
   int cached_depth(ObjectHandle h) const { return slots_[h.slot].depth; }
   double cached_area(ObjectHandle h) const { return slots_[h.slot].area; }
@@ -263,23 +265,23 @@ class CollisionWorld {
   std::optional<ObjectHandle> handle_at(uint32_t slot) const;
 
  private:
-  struct Slot {
-    TreeSource source;
-    Pose pose;
-    Aabb offset;  // world AABB of the tree at (rotation, scale), relative to the position
-    Aabb box;     // offset + position, padded
-    double area = 0;
-    int depth = 0;
+  // Hot first: set_pose reads the handle check and the pose (one cache line).
+  struct alignas(64) Slot {
     uint32_t generation = 0;
     bool live = false;
-    bool area_fresh = false;  // area/depth match the current pose, camera and LOD
     bool tree_dirty = false;  // WorldTree not yet moved to `box`
+    int depth = 0;
+    Pose pose;
+    Aabb offset;  // world AABB of the tree at (rotation, scale), relative to the position
+    uint64_t area_epoch = 0;  // == epoch_: area/depth match the current pose, camera and LOD
+    double area = 0;
+    TreeSource source;
   };
 
   Status check(ObjectHandle h) const;
   const ObjectTree& tree_of(const Slot& s) const;
   int max_depth_of(const Slot& s) const;
-  void place_box(Slot& s);
+  void place_box(uint32_t slot);  // boxes_[slot] from the slot's pose and offset
   void invalidate_all_areas();
   // Makes the area and depth of slot i current; returns areas computed.
   uint64_t refresh_depth(uint32_t i);
@@ -293,10 +295,13 @@ class CollisionWorld {
   uint32_t id_;
   WorldTree tree_;
   std::vector<Slot> slots_;
+  std::vector<Aabb> boxes_;  // per slot: world AABB (offset + position, padded); hot in the pair loop
   std::vector<uint32_t> free_slots_;  // reused LIFO
   std::vector<uint32_t> dirty_;       // slots whose WorldTree entry is stale
   size_t live_ = 0;
+  uint64_t epoch_ = 1;                // bumped by set_camera / set_lod
   bool any_stale_area_ = true;        // thesis: some live area is not fresh
+  bool legacy_all_ = false;           // legacy modes: recompute every area
   std::vector<uint8_t> cell_changed_;  // on_cell_change: per slot
 
   // Per frame scratch, kept to avoid allocations.
