@@ -7,4 +7,4 @@ cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DOCTBAKE_BUILD_TESTS=OFF >/dev/n
 cmake --build build -j"$(nproc)" --target octbake octscene
 ./build/baker/octbake -o baked assets/*.obj
 ./build/baker/octbake --info baked/*.oct
-./build/runtime/octscene/octscene run assets/scenes/test1.json --lod thesis --max-depth 3
+./build/octscene/octscene run assets/scenes/test1.json --lod thesis --max-depth 3

@@ -16,6 +16,8 @@ install(TARGETS octbake_runtime EXPORT octbakeTargets
 install(FILES ${CMAKE_CURRENT_SOURCE_DIR}/include/octbake.h DESTINATION ${CMAKE_INSTALL_INCLUDEDIR} COMPONENT runtime)
 install(DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR}/include/octbake DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
   COMPONENT runtime FILES_MATCHING PATTERN "*.h")
+install(FILES ${CMAKE_CURRENT_BINARY_DIR}/include/octbake/version.h DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/octbake
+  COMPONENT runtime)
 
 set(octbake_cmake_dir ${CMAKE_INSTALL_LIBDIR}/cmake/octbake)
 install(EXPORT octbakeTargets NAMESPACE octbake:: DESTINATION ${octbake_cmake_dir} COMPONENT runtime)

@@ -12,10 +12,12 @@
 #include <string>
 
 #include "gen.h"
-#include "picture.h"
 #include "run.h"
 #include "scene.h"
+#ifdef OCTSCENE_WITH_ANALYSIS
+#include "picture.h"
 #include "trade.h"
+#endif
 
 namespace octbake::scene {
 namespace {
@@ -225,7 +227,15 @@ int cli_main(int argc, char** argv) {
 
 int main(int argc, char** argv) {
   // trade and picture parse their own arguments.
+#ifdef OCTSCENE_WITH_ANALYSIS
   if (argc >= 2 && std::strcmp(argv[1], "trade") == 0) return octbake::scene::trade_main(argc - 1, argv + 1);
   if (argc >= 2 && std::strcmp(argv[1], "picture") == 0) return octbake::scene::picture_main(argc - 1, argv + 1);
+#else
+  for (const char* tool : {"trade", "picture"})
+    if (argc >= 2 && std::strcmp(argv[1], tool) == 0) {
+      std::fprintf(stderr, "octscene: error: %s: not built (configure with -DOCTBAKE_ANALYSIS=ON)\n", tool);
+      return 2;
+    }
+#endif
   return octbake::scene::cli_main(argc, argv);
 }
