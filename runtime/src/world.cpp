@@ -24,26 +24,7 @@ bool is_moving(const ObjectDesc& o) { return !o.velocity.isZero(0) || !o.angular
 
 }  // namespace
 
-Camera World::camera_at(int64_t f) const {
-  Camera c = settings_.camera;
-  const std::vector<CameraKey>& keys = settings_.camera_path;
-  if (keys.empty()) return c;
-  if (f <= keys.front().frame) {
-    c.position = keys.front().position, c.look_at = keys.front().look_at;
-  } else if (f >= keys.back().frame) {
-    c.position = keys.back().position, c.look_at = keys.back().look_at;
-  } else {
-    // The first key after f; keys are strictly ascending.
-    const auto next = std::upper_bound(keys.begin(), keys.end(), f,
-                                       [](int64_t frame, const CameraKey& k) { return frame < k.frame; });
-    const CameraKey& k0 = *(next - 1);
-    const CameraKey& k1 = *next;
-    const double t = double(f - k0.frame) / double(k1.frame - k0.frame);
-    c.position = k0.position + (k1.position - k0.position) * t;
-    c.look_at = k0.look_at + (k1.look_at - k0.look_at) * t;
-  }
-  return c;
-}
+Camera World::camera_at(int64_t f) const { return camera_on_path(settings_.camera, settings_.camera_path, f); }
 
 World::World(WorldSettings settings, std::vector<ObjectDesc> objects)
     : settings_(std::move(settings)), objects_(std::move(objects)), world_(collision_settings(settings_, camera_at(0))) {
@@ -152,11 +133,8 @@ void World::respond(const Collision& c) {
 void World::advance(uint32_t i) {
   ObjectDesc& o = objects_[i];
   const Eigen::Vector3d& w = o.angular_velocity;
-  if (!w.isZero(0)) {
-    // From frame 0 every frame: no drift, and responses never touch it.
-    const double angle = w.norm() * (double(frame_ + 1) * settings_.timestep);
-    o.pose.rotation = (Eigen::Quaterniond(Eigen::AngleAxisd(angle, w.normalized())) * rotation0_[i]).normalized();
-  }
+  // From frame 0 every frame: no drift, and responses never touch it.
+  if (!w.isZero(0)) o.pose.rotation = spun(rotation0_[i], w, double(frame_ + 1) * settings_.timestep);
   if (o.velocity.isZero(0)) {
     move_to(i, o.pose.position);
     return;

@@ -11,6 +11,7 @@
 #include "octbake/collide.h"
 #include "octbake/collision_world.h"
 #include "octbake/lod.h"
+#include "octbake/motion.h"
 #include "octbake/object_tree.h"
 #include "octbake/pose.h"
 #include "octbake/world_tree.h"
@@ -25,20 +26,10 @@ struct ObjectDesc {
   Pose pose;
   Eigen::Vector3d velocity{0, 0, 0};  // world units per second
   // rad/s about the world axes through the object's position. The
-  // orientation at frame f is R(w, f * timestep) * pose.rotation, computed
-  // from frame 0 every frame (no drift); responses never change it. An object
-  // is static when both velocity and angular_velocity are zero.
+  // orientation at frame f is spun(pose.rotation, w, f * timestep) (motion.h),
+  // computed from frame 0 every frame (no drift); responses never change it.
+  // An object is static when both velocity and angular_velocity are zero.
   Eigen::Vector3d angular_velocity{0, 0, 0};
-};
-
-// A camera path key. At frame f the camera's position and look_at are
-// interpolated linearly between the surrounding keys (the first key's values
-// before it, the last key's after it); up, fov, viewport, near and far stay
-// those of WorldSettings::camera.
-struct CameraKey {
-  int64_t frame = 0;
-  Eigen::Vector3d position{0, 0, -10};
-  Eigen::Vector3d look_at{0, 0, 0};
 };
 
 struct WorldSettings {
@@ -49,7 +40,9 @@ struct WorldSettings {
   LodSettings lod;
   Camera camera;
   bool areas_every_frame = false;  // else only when an object changes leaf set (or the camera moves)
-  std::vector<CameraKey> camera_path;  // frames strictly ascending; empty = fixed camera
+  // Frames strictly ascending; empty = fixed camera. Interpolated by
+  // camera_on_path (motion.h).
+  std::vector<CameraKey> camera_path;
   int threads = 1;                     // pair tests in parallel (CollisionSettings::threads)
   Executor* executor = nullptr;        // the app's job system, if any (not owned)
 };
