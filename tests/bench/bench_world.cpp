@@ -187,6 +187,17 @@ CollisionSettings collision_settings(const Scene& s, LodPolicy policy) {
   return c;
 }
 
+// The same counters for every case of the detect comparison (the CSV
+// reporter needs one set of columns).
+void set_counters(benchmark::State& state, const DetectStats& total, uint64_t allocations) {
+  const double frames = double(state.iterations());
+  state.counters["pair_tests"] = double(total.pair_tests) / frames;
+  state.counters["box_tests"] = double(total.box_tests) / frames;
+  state.counters["contacts"] = double(total.contacts) / frames;
+  state.counters["area_computations"] = double(total.area_computations) / frames;
+  state.counters["allocs_per_frame"] = double(allocations) / frames;
+}
+
 void BM_Detect(benchmark::State& state) {
   const Scene scene = make_scene(int(state.range(0)));
   const LodPolicy policy = LodPolicy(state.range(1));
@@ -225,12 +236,7 @@ void BM_Detect(benchmark::State& state) {
     total.area_computations += d.area_computations;
     state.ResumeTiming();
   }
-  const double frames = double(state.iterations());
-  state.counters["pair_tests"] = double(total.pair_tests) / frames;
-  state.counters["box_tests"] = double(total.box_tests) / frames;
-  state.counters["contacts"] = double(total.contacts) / frames;
-  state.counters["area_computations"] = double(total.area_computations) / frames;
-  state.counters["allocs_per_frame"] = double(allocations) / frames;
+  set_counters(state, total, allocations);
 }
 // Fixed frame counts, so every case (and FCL) sees exactly the same poses.
 constexpr int kFrames10k = 300, kFrames100k = 40;
@@ -294,7 +300,7 @@ void BM_FclDynamicAabb(benchmark::State& state) {
   manager.setup();
   AppMotion motion(scene);
   int64_t f = kWarmup - 3;
-  uint64_t hits = 0;
+  uint64_t hits = 0, allocations = 0;
   for (; f < kWarmup; ++f) {  // the same timed frames as BM_Detect
     motion.at(f);
     for (size_t i = 0; i < objects.size(); ++i) {
@@ -311,10 +317,14 @@ void BM_FclDynamicAabb(benchmark::State& state) {
       objects[i]->setTransform(to_fcl(motion.now[i]));
       objects[i]->computeAABB();
     }
+    const uint64_t before = g_allocations.load();
     manager.update();
     manager.collide(&hits, exact_pair);
+    allocations += g_allocations.load() - before;
   }
-  state.counters["contacts"] = double(hits) / double(state.iterations());
+  DetectStats total;
+  total.contacts = hits;
+  set_counters(state, total, allocations);
 }
 BENCHMARK(BM_FclDynamicAabb)->ArgName("objects")->Arg(10'000)->Iterations(kFrames10k)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_FclDynamicAabb)->ArgName("objects")->Arg(100'000)->Iterations(kFrames100k)->Unit(benchmark::kMicrosecond);
@@ -324,11 +334,21 @@ void BM_LegacyStep(benchmark::State& state) {
   Scene scene = make_scene(int(state.range(0)));
   legacy::World world(scene.settings, scene.objects);
   std::vector<Collision> collisions;
-  world.step(collisions);
-  for (auto _ : state) {
+  for (int f = 0; f < kWarmup; ++f) {
     collisions.clear();
     world.step(collisions);
   }
+  DetectStats total;
+  uint64_t allocations = 0;
+  for (auto _ : state) {
+    collisions.clear();
+    const uint64_t before = g_allocations.load();
+    const FrameStats s = world.step(collisions);
+    allocations += g_allocations.load() - before;
+    total.pair_tests += s.pair_tests, total.box_tests += s.box_tests, total.contacts += s.collisions;
+    total.area_computations += s.area_refreshes;
+  }
+  set_counters(state, total, allocations);
 }
 BENCHMARK(BM_LegacyStep)->ArgName("objects")->Arg(10'000)->Iterations(kFrames10k)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_LegacyStep)->ArgName("objects")->Arg(100'000)->Iterations(kFrames100k)->Unit(benchmark::kMicrosecond);
