@@ -123,7 +123,7 @@ TEST(CollisionWorldQuery, OverlapBoxAndSphereMatchBruteForceOverLeafBoxes) {
     const double tol = tolerance(s);
     for (int q = 0; q < 10; ++q) {
       const Eigen::Vector3d c = near_leaf(rng, s, 6);
-      const double r = uniform(rng, 0.2, 4) * s.scale;
+      const double r = uniform(rng, 0.3, 5) * s.scale;
       const Aabb box{c.array() - r, c.array() + r * uniform(rng, 0.2, 2)};
       OrientedBox qbox;
       qbox.center = 0.5 * (box.min + box.max);
@@ -160,6 +160,7 @@ TEST(CollisionWorldQuery, OverlapBoxAndSphereMatchBruteForceOverLeafBoxes) {
   EXPECT_LT(box_rate, 0.7);
   EXPECT_GT(sphere_rate, 0.3);
   EXPECT_LT(sphere_rate, 0.7);
+  std::printf("box queries finding something: %.3f, sphere: %.3f\n", box_rate, sphere_rate);
   EXPECT_GT(box_found, box_nonempty);  // some queries find several objects
 }
 
