@@ -2,6 +2,7 @@
 #pragma once
 #include "octbake/baked_file.h"
 #include "octbake/collide.h"
+#include "octbake/collision_world.h"
 #include "octbake/level_cache.h"
 #include "octbake/lod.h"
 #include "octbake/motion.h"

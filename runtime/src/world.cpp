@@ -8,42 +8,45 @@ namespace octbake {
 
 namespace {
 
-// World AABBs are padded by this fraction of their coordinates' magnitude so
-// that rounding in the pre-filter never rejects a pair collide() would accept
-// (collide() pads its boxes too).
-constexpr double kRelativePad = 1e-9;
-
-bool overlaps(const Aabb& a, const Aabb& b) {
-  return (a.min.array() <= b.max.array()).all() && (b.min.array() <= a.max.array()).all();
+CollisionSettings collision_settings(const WorldSettings& s, const Camera& camera) {
+  CollisionSettings c;
+  c.bounds = s.bounds;
+  c.world_depth = s.world_depth;
+  c.lod = s.lod;
+  c.camera = camera;
+  c.area_refresh = s.areas_every_frame ? AreaRefresh::every_frame : AreaRefresh::on_cell_change;
+  c.threads = s.threads;
+  c.executor = s.executor;
+  return c;
 }
+
+bool is_moving(const ObjectDesc& o) { return !o.velocity.isZero(0) || !o.angular_velocity.isZero(0); }
 
 }  // namespace
 
+Camera World::camera_at(int64_t f) const { return camera_on_path(settings_.camera, settings_.camera_path, f); }
+
 World::World(WorldSettings settings, std::vector<ObjectDesc> objects)
-    : settings_(std::move(settings)), objects_(std::move(objects)), tree_(settings_.bounds, settings_.world_depth) {
+    : settings_(std::move(settings)), objects_(std::move(objects)), world_(collision_settings(settings_, camera_at(0))) {
+  for (size_t k = 1; k < settings_.camera_path.size(); ++k)
+    assert(settings_.camera_path[k - 1].frame < settings_.camera_path[k].frame);
   const size_t n = objects_.size();
-  assert(n < (size_t{1} << 32));
-  areas_.assign(n, 0.0);
-  depths_.assign(n, 0);
-  box_.resize(n);
-  offset_box_.resize(n);
+  assert(n < (size_t{1} << 31));
   origin_.resize(n);
   start_.assign(n, 0);
-  stale_area_.assign(n, 1);
-  max_depths_.resize(n);
+  rotation0_.resize(n);
+  handles_.reserve(n);
   for (uint32_t i = 0; i < n; ++i) {
     const ObjectDesc& o = objects_[i];
-    assert(o.tree != nullptr);
-    assert(o.pose.scale > 0 && !o.pose.position.hasNaN() && !o.velocity.hasNaN());
-    Pose at_origin = o.pose;
-    at_origin.position.setZero();
-    offset_box_[i] = world_bounds(place(o.tree->bounds(), at_origin));
+    assert(o.tree != nullptr && !o.velocity.hasNaN() && o.angular_velocity.allFinite());
+    Result<ObjectHandle> h = world_.create(TreeSource::fixed(o.tree), o.pose);
+    assert(h.ok() && h->slot == i);
+    handles_.push_back(h.ok() ? *h : ObjectHandle{});
     origin_[i] = o.pose.position;
-    max_depths_[i] = o.tree->loaded_depth();
-    if (!o.velocity.isZero(0)) moving_.push_back(i);
-    move_to(i, o.pose.position);
-    (void)tree_.update(i, box_[i]);
+    rotation0_[i] = o.pose.rotation;
+    if (is_moving(o)) moving_.push_back(i);
   }
+  world_.commit_poses();
 }
 
 void World::restart_motion(uint32_t i, int64_t frame) {
@@ -53,70 +56,35 @@ void World::restart_motion(uint32_t i, int64_t frame) {
 
 void World::move_to(uint32_t i, const Eigen::Vector3d& p) {
   objects_[i].pose.position = p;
-  const Aabb& off = offset_box_[i];
-  const double pad =
-      kRelativePad * (p.cwiseAbs().maxCoeff() + std::max(off.min.cwiseAbs().maxCoeff(), off.max.cwiseAbs().maxCoeff()));
-  box_[i].min = (p + off.min).array() - pad;
-  box_[i].max = (p + off.max).array() + pad;
-}
-
-uint64_t World::refresh_lod(bool all) {
-  std::vector<uint32_t> ids;
-  for (uint32_t i = 0; i < objects_.size(); ++i) {
-    if (!all && !stale_area_[i]) continue;
-    const ObjectDesc& o = objects_[i];
-    areas_[i] = pixel_area(settings_.camera, place(o.tree->bounds(), o.pose));
-    stale_area_[i] = 0;
-    ids.push_back(i);
-  }
-  const uint64_t refreshed = ids.size();
-  if (ids.empty()) return 0;
-  std::vector<int> depths;
-  if (all || settings_.lod.policy == LodPolicy::thesis) {
-    // The thesis formula depends on every area (A_min, A_max).
-    depths = choose_depths(settings_.lod, areas_, max_depths_);
-    ids.resize(objects_.size());
-    for (uint32_t i = 0; i < ids.size(); ++i) ids[i] = i;
-  } else {
-    std::vector<double> areas;
-    std::vector<int> max_depths;
-    for (uint32_t i : ids) {
-      areas.push_back(areas_[i]);
-      max_depths.push_back(max_depths_[i]);
-    }
-    depths = choose_depths(settings_.lod, areas, max_depths);
-  }
-  for (size_t k = 0; k < ids.size(); ++k) depths_[ids[k]] = std::clamp(depths[k], 0, max_depths_[ids[k]]);
-  return refreshed;
+  const Status st = world_.set_pose(handles_[i], objects_[i].pose);
+  assert(st.ok());
+  (void)st;
 }
 
 FrameStats World::step(std::vector<Collision>& collisions) {
+  world_.set_camera(camera_at(frame_));
+  const DetectStats d = world_.detect(contacts_);
   FrameStats stats;
-  stats.area_refreshes = refresh_lod(frame_ == 0 || settings_.areas_every_frame);
+  stats.pair_tests = d.pair_tests;
+  stats.box_tests = d.box_tests;
+  stats.collisions = d.contacts;
+  stats.area_refreshes = d.area_computations;
 
-  tree_.candidate_pairs(pairs_);
   const size_t first = collisions.size();
-  for (const auto& [a, b] : pairs_) {
-    if (!overlaps(box_[a], box_[b])) continue;
-    const ObjectDesc& oa = objects_[a];
-    const ObjectDesc& ob = objects_[b];
-    const PairTest t = collide({oa.tree, oa.pose, depths_[a]}, {ob.tree, ob.pose, depths_[b]});
-    ++stats.pair_tests;
-    stats.box_tests += t.box_tests;
-    if (!t.hit) continue;
-    collisions.push_back({a, b, depths_[a], depths_[b], t.box_tests, oa.pose.position, ob.pose.position});
-  }
-  stats.collisions = collisions.size() - first;
+  for (const Contact& c : contacts_)
+    collisions.push_back({c.a.slot, c.b.slot, c.depth_a, c.depth_b, c.box_tests, objects_[c.a.slot].pose.position,
+                          objects_[c.b.slot].pose.position});
 
   if (settings_.response != Response::none)
     for (size_t k = first; k < collisions.size(); ++k) respond(collisions[k]);
   for (uint32_t i : moving_) advance(i);
+  world_.commit_poses();  // world_tree() shows the next frame's cells, as before
   ++frame_;
   return stats;
 }
 
 void World::respond(const Collision& c) {
-  const bool move_a = !objects_[c.a].velocity.isZero(0), move_b = !objects_[c.b].velocity.isZero(0);
+  const bool move_a = is_moving(objects_[c.a]), move_b = is_moving(objects_[c.b]);
   if (!move_a && !move_b) return;
   Eigen::Vector3d& va = objects_[c.a].velocity;
   Eigen::Vector3d& vb = objects_[c.b].velocity;
@@ -125,7 +93,7 @@ void World::respond(const Collision& c) {
     const double l = (va.norm() + vb.norm()) * 1.5 * settings_.timestep;
     for (uint32_t i : {c.a, c.b}) {
       Eigen::Vector3d& v = objects_[i].velocity;
-      if (v.isZero(0)) continue;
+      if (v.isZero(0)) continue;  // static, or only spinning: nothing to reverse
       v = -v;
       move_to(i, objects_[i].pose.position + v.normalized() * l);
       restart_motion(i, frame_);
@@ -135,8 +103,8 @@ void World::respond(const Collision& c) {
 
   // separate: the boxes as they are now (an earlier response this frame may
   // already have moved them apart).
-  const Aabb& ba = box_[c.a];
-  const Aabb& bb = box_[c.b];
+  const Aabb& ba = world_.bounds(handles_[c.a]);
+  const Aabb& bb = world_.bounds(handles_[c.b]);
   const Eigen::Vector3d depth = ba.max.cwiseMin(bb.max) - ba.min.cwiseMax(bb.min);
   if ((depth.array() < 0).any()) return;
   int k = 0;
@@ -164,26 +132,32 @@ void World::respond(const Collision& c) {
 
 void World::advance(uint32_t i) {
   ObjectDesc& o = objects_[i];
+  const Eigen::Vector3d& w = o.angular_velocity;
+  // From frame 0 every frame: no drift, and responses never touch it.
+  if (!w.isZero(0)) o.pose.rotation = spun(rotation0_[i], w, double(frame_ + 1) * settings_.timestep);
+  if (o.velocity.isZero(0)) {
+    move_to(i, o.pose.position);
+    return;
+  }
   const Eigen::Vector3d current = o.pose.position;
   Eigen::Vector3d p = origin_[i] + o.velocity * (double(frame_ + 1 - start_[i]) * settings_.timestep);
-  const Aabb& w = settings_.bounds;
+  const Aabb& box = settings_.bounds;
   bool bounced = false;
   for (int k = 0; k < 3; ++k) {
-    const bool below = p[k] < w.min[k] && o.velocity[k] < 0;
-    const bool above = p[k] > w.max[k] && o.velocity[k] > 0;
+    const bool below = p[k] < box.min[k] && o.velocity[k] < 0;
+    const bool above = p[k] > box.max[k] && o.velocity[k] > 0;
     if (!below && !above) continue;
     o.velocity[k] = -o.velocity[k];
     bounced = true;
     // Mirror about the face it would cross; an object already outside on this
     // axis just stops going further out.
-    if (current[k] < w.min[k] || current[k] > w.max[k])
+    if (current[k] < box.min[k] || current[k] > box.max[k])
       p[k] = current[k];
     else
-      p[k] = std::clamp(below ? 2 * w.min[k] - p[k] : 2 * w.max[k] - p[k], w.min[k], w.max[k]);
+      p[k] = std::clamp(below ? 2 * box.min[k] - p[k] : 2 * box.max[k] - p[k], box.min[k], box.max[k]);
   }
   move_to(i, p);
   if (bounced) restart_motion(i, frame_ + 1);
-  if (tree_.update(i, box_[i])) stale_area_[i] = 1;
 }
 
 }  // namespace octbake

@@ -9,6 +9,8 @@ namespace octbake {
 
 namespace {
 
+constexpr size_t kCellReserve = 8, kEntryReserve = 8;
+
 void insert_sorted(std::vector<uint32_t>& v, uint32_t id) {
   v.insert(std::lower_bound(v.begin(), v.end(), id), id);
 }
@@ -78,6 +80,9 @@ uint32_t WorldTree::cell_slot(const Coord& at) {
   if (free_cells_.empty()) {
     slot = uint32_t(cells_.size());
     cells_.emplace_back();
+    // Cells are reused (LIFO) by whatever moves in next: room for a few
+    // occupants up front, so a steady-state frame allocates nothing.
+    cells_.back().ids.reserve(kCellReserve);
   } else {
     slot = free_cells_.back();
     free_cells_.pop_back();
@@ -116,6 +121,7 @@ void WorldTree::relink(uint32_t id, const Coord& lo, const Coord& hi, bool overf
   if (was_overflow && !overflow) erase_sorted(overflow_ids_, id);
   if (overflow && !was_overflow) insert_sorted(overflow_ids_, id);
   // Leave the cells outside the new range (all of them when going to overflow).
+  if (e.cells.capacity() < kEntryReserve) e.cells.reserve(kEntryReserve);  // a box over 2x2x2 cells
   size_t kept = 0;
   for (uint32_t slot : e.cells) {
     if (!overflow && inside(cells_[slot].at, lo, hi))
@@ -177,14 +183,14 @@ namespace {
 
 // LSD radix sort of pairs by (first, second), 8 bits per pass, skipping the
 // passes whose digit is the same in every key (ids < 2^17 need only ~5 of 8).
-void radix_sort(std::vector<std::pair<uint32_t, uint32_t>>& v) {
+void radix_sort(std::vector<std::pair<uint32_t, uint32_t>>& v, std::vector<std::pair<uint32_t, uint32_t>>& tmp) {
   const auto key = [](const std::pair<uint32_t, uint32_t>& p) { return (uint64_t(p.first) << 32) | p.second; };
   std::array<std::array<uint32_t, 256>, 8> count{};
   for (const auto& p : v) {
     const uint64_t k = key(p);
     for (int d = 0; d < 8; ++d) ++count[d][(k >> (8 * d)) & 0xFF];
   }
-  std::vector<std::pair<uint32_t, uint32_t>> tmp(v.size());
+  tmp.resize(v.size());  // scratch kept by the caller: no allocation per frame
   for (int d = 0; d < 8; ++d) {
     auto& c = count[d];
     if (std::find(c.begin(), c.end(), uint32_t(v.size())) != c.end()) continue;  // one bucket: no-op pass
@@ -224,7 +230,7 @@ void WorldTree::candidate_pairs(std::vector<std::pair<uint32_t, uint32_t>>& out)
       if (b == a || (entries_[b].overflow && b < a)) continue;  // an overflow pair once
       out.emplace_back(std::min(a, b), std::max(a, b));
     }
-  radix_sort(out);
+  radix_sort(out, sort_scratch_);
 }
 
 }  // namespace octbake

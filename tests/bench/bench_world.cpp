@@ -1,15 +1,49 @@
 // World::step per frame: N solid-box objects (trees of depth 3..6) on a
 // jittered lattice of constant spacing, so density does not change with N; a
 // third move at ~2 units/s, separate response, screen LOD, world cells about
-// one spacing wide. Run: build with -DOCTBAKE_BENCH=ON, then
+// one spacing wide.
+//
+// The app-driven CollisionWorld on the same scenes (BM_Detect): every pose
+// set by the app each frame (a third moving, a tenth spinning), the camera
+// moving every frame, set_pose + detect() timed; against FCL's
+// DynamicAABBTree (setTransform + computeAABB of every object, update(),
+// collide() with the exact OBBRSS BVH test of the box meshes) on the same
+// poses (BM_FclDynamicAabb), and against the World::step of commit 68d2b0b
+// with its fixed camera (BM_LegacyStep, tests/bench/legacy_world.h).
+// Heap allocations per timed frame are counted by replacing operator new.
+//
+// Run: build with -DOCTBAKE_BENCH=ON, then
 //   ./build/tests/bench_world --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+// operator new/delete are replaced below (malloc/free): GCC 12 then flags
+// every inlined delete as "mismatched" though the pair is consistent.
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
 #include <benchmark/benchmark.h>
+#include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
+#include <fcl/narrowphase/collision.h>
 
+#include <atomic>
 #include <cmath>
+#include <cstdlib>
+#include <new>
 #include <random>
 #include <vector>
 
+#include "legacy_world.h"
+#include "octbake/collision_world.h"
 #include "octbake/world.h"
+
+// Every heap allocation of the process, for the allocations-per-frame counter.
+static std::atomic<uint64_t> g_allocations{0};
+void* operator new(size_t n) {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(n ? n : 1)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](size_t n) { return operator new(n); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, size_t) noexcept { std::free(p); }
+void operator delete[](void* p, size_t) noexcept { std::free(p); }
 
 namespace octbake {
 namespace {
@@ -104,6 +138,220 @@ void BM_CandidatePairs(benchmark::State& state) {
   state.counters["pairs"] = double(pairs.size());
 }
 BENCHMARK(BM_CandidatePairs)->ArgName("objects")->Arg(210)->Arg(10'000)->Arg(100'000)->Unit(benchmark::kMicrosecond);
+
+// ---- the app-driven world ----
+
+constexpr double kDt = 1.0 / 30.0;
+constexpr int64_t kWarmup = 190;
+
+// The app's own motion: a third oscillate (bounded, so long runs stay in the
+// world), a tenth spin; every pose is recomputed and set each frame.
+struct AppMotion {
+  std::vector<Pose> start;
+  std::vector<Eigen::Vector3d> velocity, spin;
+  std::vector<Pose> now;
+
+  explicit AppMotion(const Scene& s) {
+    std::mt19937 rng(7);
+    for (size_t i = 0; i < s.objects.size(); ++i) {
+      start.push_back(s.objects[i].pose);
+      velocity.push_back(s.objects[i].velocity);
+      const Eigen::Vector3d axis(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5);
+      spin.push_back(i % 10 == 1 ? Eigen::Vector3d(axis.normalized() * 1.5) : Eigen::Vector3d::Zero());
+    }
+    now = start;
+  }
+  void at(int64_t f) {
+    const double t = double(f) * kDt;
+    for (size_t i = 0; i < now.size(); ++i) {
+      now[i].position = start[i].position + velocity[i] * std::sin(t);
+      if (!spin[i].isZero(0))
+        now[i].rotation = Eigen::Quaterniond(Eigen::AngleAxisd(spin[i].norm() * t, spin[i].normalized())) * start[i].rotation;
+    }
+  }
+  static Camera camera(const Scene& s, int64_t f) {
+    Camera c = s.settings.camera;
+    const double a = 0.01 * double(f), r = c.position.z() - c.look_at.z();
+    c.position = c.look_at + Eigen::Vector3d(r * std::sin(a), 0.2 * r, r * std::cos(a));
+    return c;
+  }
+};
+
+CollisionSettings collision_settings(const Scene& s, LodPolicy policy) {
+  CollisionSettings c;
+  c.bounds = s.settings.bounds;
+  c.world_depth = s.settings.world_depth;
+  c.lod = s.settings.lod;
+  c.lod.policy = policy;
+  c.camera = s.settings.camera;
+  return c;
+}
+
+// The same counters for every case of the detect comparison (the CSV
+// reporter needs one set of columns).
+void set_counters(benchmark::State& state, const DetectStats& total, uint64_t allocations) {
+  const double frames = double(state.iterations());
+  state.counters["pair_tests"] = double(total.pair_tests) / frames;
+  state.counters["box_tests"] = double(total.box_tests) / frames;
+  state.counters["contacts"] = double(total.contacts) / frames;
+  state.counters["area_computations"] = double(total.area_computations) / frames;
+  state.counters["allocs_per_frame"] = double(allocations) / frames;
+}
+
+void BM_Detect(benchmark::State& state) {
+  const Scene scene = make_scene(int(state.range(0)));
+  const LodPolicy policy = LodPolicy(state.range(1));
+  CollisionWorld world(collision_settings(scene, policy));
+  std::vector<ObjectHandle> handles;
+  for (const ObjectDesc& o : scene.objects) handles.push_back(world.create(TreeSource::fixed(o.tree), o.pose).value());
+  AppMotion motion(scene);
+  std::vector<Contact> contacts;
+  // Warm up for one period of the motion (2 pi / 1 rad/s at 30 fps): every
+  // WorldTree cell the motion reaches and every scratch buffer exist, so the
+  // timed frames are the steady state.
+  int64_t f = 0;
+  for (; f < kWarmup; ++f) {
+    motion.at(f);
+    for (size_t i = 0; i < handles.size(); ++i) (void)world.set_pose(handles[i], motion.now[i]);
+    world.set_camera(AppMotion::camera(scene, f));
+    world.detect(contacts);
+  }
+  DetectStats total;
+  uint64_t allocations = 0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    motion.at(f);
+    const Camera camera = AppMotion::camera(scene, f);
+    ++f;
+    const uint64_t before = g_allocations.load();
+    state.ResumeTiming();
+    for (size_t i = 0; i < handles.size(); ++i) (void)world.set_pose(handles[i], motion.now[i]);
+    world.set_camera(camera);
+    const DetectStats d = world.detect(contacts);
+    state.PauseTiming();
+    allocations += g_allocations.load() - before;
+    total.pair_tests += d.pair_tests;
+    total.box_tests += d.box_tests;
+    total.contacts += d.contacts;
+    total.area_computations += d.area_computations;
+    state.ResumeTiming();
+  }
+  set_counters(state, total, allocations);
+}
+// Fixed frame counts, so every case (and FCL) sees exactly the same poses.
+constexpr int kFrames10k = 300, kFrames100k = 40;
+BENCHMARK(BM_Detect)
+    ->ArgsProduct({{10'000}, {int(LodPolicy::screen), int(LodPolicy::fixed)}})
+    ->ArgNames({"objects", "policy"})
+    ->Iterations(kFrames10k)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Detect)
+    ->ArgsProduct({{100'000}, {int(LodPolicy::screen), int(LodPolicy::fixed)}})
+    ->ArgNames({"objects", "policy"})
+    ->Iterations(kFrames100k)
+    ->Unit(benchmark::kMicrosecond);
+
+// FCL on the same poses: a 12-triangle box mesh per tree (the solid trees are
+// exactly their root boxes), OBBRSS BVHs, DynamicAABBTree broadphase.
+using Bvh = fcl::BVHModel<fcl::OBBRSSd>;
+
+std::shared_ptr<Bvh> box_bvh(const Aabb& b) {
+  std::vector<fcl::Vector3d> v;
+  for (int j = 0; j < 8; ++j)
+    v.emplace_back(j & 1 ? b.max.x() : b.min.x(), j & 2 ? b.max.y() : b.min.y(), j & 4 ? b.max.z() : b.min.z());
+  const int faces[6][4] = {{0, 1, 3, 2}, {4, 6, 7, 5}, {0, 4, 5, 1}, {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 5, 7, 3}};
+  std::vector<fcl::Triangle> t;
+  for (const auto& q : faces) t.emplace_back(q[0], q[1], q[2]), t.emplace_back(q[0], q[2], q[3]);
+  auto bvh = std::make_shared<Bvh>();
+  bvh->beginModel(int(t.size()), int(v.size()));
+  bvh->addSubModel(v, t);
+  bvh->endModel();
+  bvh->computeLocalAABB();
+  return bvh;
+}
+
+fcl::Transform3d to_fcl(const Pose& p) {
+  fcl::Transform3d t = fcl::Transform3d::Identity();
+  t.linear() = p.rotation.toRotationMatrix();
+  t.translation() = p.position;
+  return t;
+}
+
+bool exact_pair(fcl::CollisionObjectd* a, fcl::CollisionObjectd* b, void* hits) {
+  const fcl::CollisionRequestd request(1, false);
+  fcl::CollisionResultd result;
+  fcl::collide(a, b, request, result);
+  *static_cast<uint64_t*>(hits) += result.isCollision();
+  return false;
+}
+
+void BM_FclDynamicAabb(benchmark::State& state) {
+  const Scene scene = make_scene(int(state.range(0)));
+  std::vector<std::shared_ptr<Bvh>> bvhs;
+  for (const ObjectTree& t : scene.trees) bvhs.push_back(box_bvh(t.bounds()));
+  std::vector<std::unique_ptr<fcl::CollisionObjectd>> objects;
+  std::vector<fcl::CollisionObjectd*> raw;
+  for (const ObjectDesc& o : scene.objects) {
+    objects.push_back(std::make_unique<fcl::CollisionObjectd>(bvhs[size_t(o.tree - scene.trees.data())], to_fcl(o.pose)));
+    raw.push_back(objects.back().get());
+  }
+  fcl::DynamicAABBTreeCollisionManagerd manager;
+  manager.registerObjects(raw);
+  manager.setup();
+  AppMotion motion(scene);
+  int64_t f = kWarmup - 3;
+  uint64_t hits = 0, allocations = 0;
+  for (; f < kWarmup; ++f) {  // the same timed frames as BM_Detect
+    motion.at(f);
+    for (size_t i = 0; i < objects.size(); ++i) {
+      objects[i]->setTransform(to_fcl(motion.now[i]));
+      objects[i]->computeAABB();
+    }
+    manager.update();
+  }
+  for (auto _ : state) {
+    state.PauseTiming();
+    motion.at(f++);
+    state.ResumeTiming();
+    for (size_t i = 0; i < objects.size(); ++i) {
+      objects[i]->setTransform(to_fcl(motion.now[i]));
+      objects[i]->computeAABB();
+    }
+    const uint64_t before = g_allocations.load();
+    manager.update();
+    manager.collide(&hits, exact_pair);
+    allocations += g_allocations.load() - before;
+  }
+  DetectStats total;
+  total.contacts = hits;
+  set_counters(state, total, allocations);
+}
+BENCHMARK(BM_FclDynamicAabb)->ArgName("objects")->Arg(10'000)->Iterations(kFrames10k)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_FclDynamicAabb)->ArgName("objects")->Arg(100'000)->Iterations(kFrames100k)->Unit(benchmark::kMicrosecond);
+
+// The World::step of commit 68d2b0b (fixed camera, its own motion).
+void BM_LegacyStep(benchmark::State& state) {
+  Scene scene = make_scene(int(state.range(0)));
+  legacy::World world(scene.settings, scene.objects);
+  std::vector<Collision> collisions;
+  for (int f = 0; f < kWarmup; ++f) {
+    collisions.clear();
+    world.step(collisions);
+  }
+  DetectStats total;
+  uint64_t allocations = 0;
+  for (auto _ : state) {
+    collisions.clear();
+    const uint64_t before = g_allocations.load();
+    const FrameStats s = world.step(collisions);
+    allocations += g_allocations.load() - before;
+    total.pair_tests += s.pair_tests, total.box_tests += s.box_tests, total.contacts += s.collisions;
+    total.area_computations += s.area_refreshes;
+  }
+  set_counters(state, total, allocations);
+}
+BENCHMARK(BM_LegacyStep)->ArgName("objects")->Arg(10'000)->Iterations(kFrames10k)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_LegacyStep)->ArgName("objects")->Arg(100'000)->Iterations(kFrames100k)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace octbake

@@ -1,13 +1,17 @@
-// A scene in motion: objects on the WorldTree, LOD depths from pixel areas,
-// conservative pair tests and a collision response. step() is deterministic:
-// the same inputs give bit-identical states on every run.
+// The built-in simulation: a thin layer over CollisionWorld (collision_world.h)
+// that owns the motion (constant velocities, angular velocities, a camera
+// path) and applies one of three collision responses. step() is
+// deterministic: the same inputs give bit-identical states on every run and
+// for every thread count.
 #pragma once
 #include <cstdint>
 #include <string>
 #include <vector>
 
 #include "octbake/collide.h"
+#include "octbake/collision_world.h"
 #include "octbake/lod.h"
+#include "octbake/motion.h"
 #include "octbake/object_tree.h"
 #include "octbake/pose.h"
 #include "octbake/world_tree.h"
@@ -20,7 +24,12 @@ struct ObjectDesc {
   std::string name;
   const ObjectTree* tree = nullptr;  // must outlive the World
   Pose pose;
-  Eigen::Vector3d velocity{0, 0, 0};  // world units per second; zero = static
+  Eigen::Vector3d velocity{0, 0, 0};  // world units per second
+  // rad/s about the world axes through the object's position. The
+  // orientation at frame f is spun(pose.rotation, w, f * timestep) (motion.h),
+  // computed from frame 0 every frame (no drift); responses never change it.
+  // An object is static when both velocity and angular_velocity are zero.
+  Eigen::Vector3d angular_velocity{0, 0, 0};
 };
 
 struct WorldSettings {
@@ -30,7 +39,12 @@ struct WorldSettings {
   Response response = Response::separate;
   LodSettings lod;
   Camera camera;
-  bool areas_every_frame = false;  // else only when an object changes leaf set
+  bool areas_every_frame = false;  // else only when an object changes leaf set (or the camera moves)
+  // Frames strictly ascending; empty = fixed camera. Interpolated by
+  // camera_on_path (motion.h).
+  std::vector<CameraKey> camera_path;
+  int threads = 1;                     // pair tests in parallel (CollisionSettings::threads)
+  Executor* executor = nullptr;        // the app's job system, if any (not owned)
 };
 
 struct Collision {
@@ -48,6 +62,8 @@ struct FrameStats {
 };
 
 // Frame loop (INTERFACE.md sections 4 and 5). Per step, for frame f:
+//  0. Camera: with a camera path, the camera of frame f (a moved camera
+//     makes every area stale).
 //  1. LOD: recompute the pixel area of every object whose leaf set changed
 //     since its last refresh (all on the first frame, or every frame with
 //     areas_every_frame), then depths by choose_depths, each object's max depth
@@ -63,14 +79,16 @@ struct FrameStats {
 //     (split evenly when both move), and when they approach on that axis each
 //     one's velocity component toward the other is reversed. Static objects
 //     (zero velocity) never move.
-//  4. Advance: position = p0 + v * ((f + 1 - f0) * timestep) from the last
+//  4. Advance: orientation q(f+1) = R(w, (f+1) * timestep) * q(0);
+//     position = p0 + v * ((f + 1 - f0) * timestep) from the last
 //     motion change (p0 at frame f0), so positions do not drift with summed
 //     timesteps. A component that would take the position (the mesh origin)
 //     out of the world box while moving outward is reversed and the position
 //     mirrored back inside about that face.
 class World {
  public:
-  // Every object's tree must be non-null and outlive the World.
+  // Every object's tree must be non-null and outlive the World; poses valid
+  // (asserted), camera_path frames strictly ascending (asserted).
   World(WorldSettings settings, std::vector<ObjectDesc> objects);
 
   // Tests frame frame() at the current positions, appends its collisions
@@ -83,31 +101,30 @@ class World {
   size_t size() const { return objects_.size(); }
   // Current pose and velocity (positions as of frame()).
   const ObjectDesc& object(size_t i) const { return objects_[i]; }
-  int depth(size_t i) const { return depths_[i]; }
-  double area(size_t i) const { return areas_[i]; }
+  // Depth and pixel area as of the last step's LOD pass.
+  int depth(size_t i) const { return world_.cached_depth(handles_[i]); }
+  double area(size_t i) const { return world_.cached_area(handles_[i]); }
   const WorldSettings& settings() const { return settings_; }
-  const WorldTree& world_tree() const { return tree_; }
+  const WorldTree& world_tree() const { return world_.world_tree(); }
+  const CollisionWorld& collision_world() const { return world_; }
+  // The camera of frame f (settings().camera, moved along camera_path).
+  Camera camera_at(int64_t f) const;
 
  private:
   WorldSettings settings_;
   std::vector<ObjectDesc> objects_;
-  std::vector<double> areas_;
-  std::vector<int> depths_;
-  WorldTree tree_;
+  CollisionWorld world_;
+  std::vector<ObjectHandle> handles_;  // handles_[i].slot == i
   int64_t frame_ = 0;
 
-  // Per object, by index. Hot (per frame) first.
-  std::vector<Aabb> box_;              // world AABB at the current position, padded
-  std::vector<Aabb> offset_box_;       // world AABB relative to the position (fixed: no spin)
+  // Per object, by index.
   std::vector<Eigen::Vector3d> origin_;  // position at frame start_ of the current motion
   std::vector<int64_t> start_;
-  std::vector<uint8_t> stale_area_;
-  std::vector<int> max_depths_;
-  std::vector<uint32_t> moving_;       // indices with non-zero velocity, ascending
-  std::vector<std::pair<uint32_t, uint32_t>> pairs_;  // scratch
+  std::vector<Eigen::Quaterniond> rotation0_;  // orientation at frame 0
+  std::vector<uint32_t> moving_;  // indices with non-zero velocity or angular velocity, ascending
+  std::vector<Contact> contacts_;  // scratch
 
-  uint64_t refresh_lod(bool all);
-  void move_to(uint32_t i, const Eigen::Vector3d& p);  // position and box
+  void move_to(uint32_t i, const Eigen::Vector3d& p);  // position (and the collision world's pose)
   void restart_motion(uint32_t i, int64_t frame);       // the motion changed: p0, f0 = now
   void respond(const Collision& c);
   void advance(uint32_t i);

@@ -98,6 +98,7 @@ class WorldTree {
   size_t table_used_ = 0;
   std::vector<uint32_t> overflow_ids_;  // sorted
   std::vector<uint32_t> present_ids_;   // sorted
+  mutable std::vector<std::pair<uint32_t, uint32_t>> sort_scratch_;  // candidate_pairs' radix sort
 };
 
 }  // namespace octbake

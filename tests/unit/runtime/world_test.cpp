@@ -319,5 +319,141 @@ TEST(World, ReinsertsAndRefreshesAreasOnlyOnLeafChange) {
   }
 }
 
+// ---- motion owned by the layer: spin, camera path, threads ----
+
+ObjectTree bar(int depth) {
+  OctreeMasks m;
+  m.bounds = {Eigen::Vector3d(-2, -0.2, -0.2), Eigen::Vector3d(2, 0.2, 0.2)};
+  for (int d = 0; d < depth; ++d) m.masks.emplace_back(size_t(1) << (3 * d), uint8_t{0xFF});
+  TreeInfo info;
+  info.bounds = m.bounds;
+  info.depth = depth;
+  return ObjectTree(std::move(info), std::move(m));
+}
+
+bool same_bits(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b) {
+  return std::memcmp(a.coeffs().data(), b.coeffs().data(), sizeof(double) * 4) == 0;
+}
+
+// A bar spinning about z next to a cube: the orientation is computed from
+// frame 0 every frame (bit for bit), responses never change it, and every
+// frame's collisions are collide() at the spun pose.
+TEST(World, SpinIsFromFrameZeroAndContactsFollowIt) {
+  const ObjectTree b = bar(3), cube = solid_cube(0.5, 3);
+  for (Response r : {Response::none, Response::separate, Response::thesis}) {
+    WorldSettings s = settings(r, 0.1);
+    ObjectDesc spinner = desc(b, {0, 0, 0}, {0, 0, 0});
+    spinner.angular_velocity = {0, 0, 1.3};
+    spinner.pose.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitX()));
+    const Eigen::Quaterniond q0 = spinner.pose.rotation;
+    World world(s, {spinner, desc(cube, {2.3, 0, 0}, {0, 0, 0})});
+    std::vector<Collision> c;
+    int hits = 0, frames = 120;
+    for (int f = 0; f < frames; ++f) {
+      const Eigen::Quaterniond expected =
+          (Eigen::Quaterniond(Eigen::AngleAxisd(1.3 * (double(f) * 0.1), Eigen::Vector3d::UnitZ())) * q0).normalized();
+      if (f > 0) {
+        EXPECT_TRUE(same_bits(world.object(0).pose.rotation, expected)) << "frame " << f;
+      }
+      const PlacedTree pa{&b, world.object(0).pose, 3}, pb{&cube, world.object(1).pose, 3};
+      const bool want = collide(pa, pb).hit;
+      c.clear();
+      world.step(c);
+      EXPECT_EQ(c.size(), size_t(want)) << "frame " << f;
+      hits += want;
+    }
+    // It sweeps through the cube twice per turn: both hit and miss frames
+    // (separate pushes it out of reach after the first contacts).
+    EXPECT_GT(hits, r == Response::separate ? 0 : frames / 10);
+    EXPECT_LT(hits, frames * 7 / 10);
+    // Spin alone is motion: the separate response pushed the spinner off its
+    // spot (the cube, static, never moves).
+    EXPECT_EQ(world.object(0).pose.position.isZero(0), r != Response::separate);
+    EXPECT_TRUE(same_bits(world.object(1).pose.position, Eigen::Vector3d(2.3, 0, 0)));
+  }
+}
+
+TEST(World, CameraPathInterpolatesPositionAndLookAt) {
+  WorldSettings s = settings(Response::none);
+  s.camera.fov_y_deg = 40;
+  s.camera.up = {0, 0, 1};
+  s.camera_path = {{10, {0, 0, -10}, {0, 0, 0}}, {20, {10, 0, -10}, {0, 5, 0}}, {40, {10, 20, -10}, {0, 5, 0}}};
+  World world(s, {});
+  auto at = [&](int64_t f) { return world.camera_at(f); };
+  EXPECT_EQ(at(-5).position, Eigen::Vector3d(0, 0, -10));
+  EXPECT_EQ(at(10).position, Eigen::Vector3d(0, 0, -10));
+  EXPECT_EQ(at(15).position, Eigen::Vector3d(5, 0, -10));
+  EXPECT_EQ(at(15).look_at, Eigen::Vector3d(0, 2.5, 0));
+  EXPECT_EQ(at(20).position, Eigen::Vector3d(10, 0, -10));
+  EXPECT_EQ(at(30).position, Eigen::Vector3d(10, 10, -10));
+  EXPECT_EQ(at(30).look_at, Eigen::Vector3d(0, 5, 0));
+  EXPECT_EQ(at(1000).position, Eigen::Vector3d(10, 20, -10));
+  EXPECT_EQ(at(15).fov_y_deg, 40);
+  EXPECT_EQ(at(15).up, Eigen::Vector3d(0, 0, 1));
+}
+
+// Depths follow the camera path every frame: each object's depth after a
+// step is screen_depth over its pixel area from that frame's camera.
+TEST(World, DepthsFollowTheCameraPath) {
+  const ObjectTree cube = solid_cube(0.5, 6);
+  WorldSettings s = settings(Response::none);
+  s.lod.policy = LodPolicy::screen;
+  s.lod.min_depth = 0;
+  s.lod.max_depth = 6;
+  s.camera_path = {{0, {0, 0, -400}, {0, 0, 0}}, {60, {0, 0, -2}, {0, 0, 0}}};
+  World world(s, {desc(cube, {0, 0, 0}, {0, 0, 0}), desc(cube, {3, 0, 0}, {0.5, 0, 0})});
+  std::set<int> seen;
+  std::vector<Collision> c;
+  for (int f = 0; f < 70; ++f) {
+    std::vector<Pose> poses = {world.object(0).pose, world.object(1).pose};
+    const FrameStats stats = world.step(c);
+    EXPECT_EQ(stats.area_refreshes, f <= 60 ? 2u : 0u) << "frame " << f;  // a still camera refreshes nothing
+    for (size_t i = 0; i < 2; ++i) {
+      const double area = pixel_area(world.camera_at(f), place(cube.bounds(), poses[i]));
+      EXPECT_EQ(world.area(i), area) << "frame " << f;
+      EXPECT_EQ(world.depth(i), screen_depth(area, 0, 6, s.lod.pixel_tolerance)) << "frame " << f;
+    }
+    seen.insert(world.depth(0));
+  }
+  EXPECT_GE(seen.size(), 4u);
+}
+
+// The pair tests of a frame in parallel: collisions, counts and every pose
+// bit-identical for 1, 2, 3 and 8 threads.
+TEST(World, ThreadCountsGiveBitIdenticalRuns) {
+  const ObjectTree cube = solid_cube(0.5, 4), b = bar(4);
+  std::mt19937 rng(5);
+  std::vector<ObjectDesc> objects;
+  for (int i = 0; i < 300; ++i) {
+    ObjectDesc o = desc(i % 2 ? cube : b, {uniform(rng, -20, 20), uniform(rng, -20, 20), uniform(rng, -20, 20)}, {0, 0, 0});
+    if (i % 3 == 0) o.velocity = {uniform(rng, -3, 3), uniform(rng, -3, 3), uniform(rng, -3, 3)};
+    if (i % 10 == 0) o.angular_velocity = {uniform(rng, -2, 2), uniform(rng, -2, 2), uniform(rng, -2, 2)};
+    objects.push_back(o);
+  }
+  auto run = [&](int threads) {
+    WorldSettings s = settings(Response::separate, 0.05);
+    s.bounds = {Eigen::Vector3d::Constant(-20), Eigen::Vector3d::Constant(20)};
+    s.lod.policy = LodPolicy::screen;
+    s.camera_path = {{0, {0, 0, -60}, {0, 0, 0}}, {100, {40, 10, -20}, {0, 0, 0}}};
+    s.threads = threads;
+    World world(s, objects);
+    std::vector<std::tuple<uint32_t, uint32_t, int, int, uint64_t>> log;
+    std::vector<Collision> c;
+    uint64_t box_tests = 0;
+    for (int f = 0; f < 100; ++f) {
+      c.clear();
+      box_tests += world.step(c).box_tests;
+      for (const Collision& k : c) log.emplace_back(k.a, k.b, k.depth_a, k.depth_b, k.box_tests);
+    }
+    std::vector<double> state;
+    for (size_t i = 0; i < world.size(); ++i)
+      for (int k = 0; k < 3; ++k) state.push_back(world.object(i).pose.position[k]);
+    return std::tuple(log, box_tests, state);
+  };
+  const auto reference = run(1);
+  EXPECT_GT(std::get<0>(reference).size(), 30u);
+  for (int threads : {2, 3, 8}) EXPECT_TRUE(run(threads) == reference) << threads << " threads";
+}
+
 }  // namespace
 }  // namespace octbake

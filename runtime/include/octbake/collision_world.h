@@ -1,0 +1,324 @@
+// CollisionWorld: the app-driven collision world. The app owns the motion: it
+// creates and destroys objects at any time, sets every object's pose and the
+// camera whenever it likes (typically every frame), and calls detect() to get
+// this frame's contacts. The world never moves anything: no response, no
+// integration (World, in world.h, is the built-in simulation on top of it).
+//
+// A frame, as an engine uses it:
+//
+//   CollisionWorld world(settings);
+//   ObjectHandle h = world.create(TreeSource::fixed(&tree), pose).value();
+//   for (;;) {
+//     world.set_camera(camera);               // every frame
+//     world.set_pose(h, pose_of_my_entity);   // for every object that moved
+//     world.detect(contacts);                 // LOD + broadphase + pair tests
+//     for (const Contact& c : contacts) respond(c.a, c.b, c.estimate);
+//     world.ray_cast(eye, dir, 100.0);        // queries see the same depths
+//   }
+//
+// Determinism: with the same sequence of calls every result (contacts, depths,
+// counts, query answers) is bit-identical across runs and thread counts.
+//
+// Errors: a call with a destroyed handle (stale generation), a handle of
+// another CollisionWorld or a never-created slot, or bad numbers (non-finite
+// pose, scale <= 0, non-unit quaternion) returns a typed Error
+// (ErrorCode::invalid_argument, message naming the reason) and changes
+// nothing. No call has undefined behaviour on bad input.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <variant>
+#include <vector>
+
+#include "octbake/collide.h"
+#include "octbake/lod.h"
+#include "octbake/object_tree.h"
+#include "octbake/pose.h"
+#include "octbake/result.h"
+#include "octbake/world_tree.h"
+
+namespace octbake {
+
+class LevelCache;        // octbake/level_cache.h: streamed trees
+using TreeId = uint32_t;  // a tree inside a LevelCache
+
+// Success or a typed Error.
+using Status = Result<std::monostate>;
+
+// Names one object of one CollisionWorld. A handle stays valid until its
+// object is destroyed; the slot is then reused with a new generation, so an
+// old handle is refused instead of naming the new object. generation 0 is
+// never issued: a default-constructed handle is always invalid.
+struct ObjectHandle {
+  uint32_t slot = 0;
+  uint32_t generation = 0;
+  uint32_t world = 0;  // id of the issuing CollisionWorld (foreign handles are refused)
+  bool operator==(const ObjectHandle&) const = default;
+};
+
+// Where an object's ObjectTree comes from.
+//  fixed(tree): a decoded tree the app keeps alive while any object uses it;
+//    its usable depth is tree->loaded_depth().
+//  streamed(cache, id): a tree of a LevelCache; levels deeper than held are
+//    decoded on demand by detect() up to the baked depth, within the cache's
+//    memory budget (see detect()).
+struct TreeSource {
+  const ObjectTree* tree = nullptr;
+  LevelCache* cache = nullptr;
+  TreeId id = 0;
+  static TreeSource fixed(const ObjectTree* t) { return {t, nullptr, 0}; }
+  static TreeSource streamed(LevelCache* c, TreeId i) { return {nullptr, c, i}; }
+};
+
+// ---- the executor seam (parallel narrow phase) ----
+
+// A range job: run(ctx, begin, end) handles items [begin, end). Plain function
+// pointer + context, so handing work to an executor never allocates.
+struct RangeTask {
+  void (*run)(const void* ctx, size_t begin, size_t end) = nullptr;
+  const void* ctx = nullptr;
+  void operator()(size_t begin, size_t end) const { run(ctx, begin, end); }
+};
+
+// The app's job system. parallel_for must call task on disjoint ranges that
+// together cover [0, count) exactly once, each range at least `grain` items
+// (except possibly the last), in any order, on any threads, and return only
+// when all are done. Items are independent and write to separate slots, so
+// results do not depend on how the ranges are split or scheduled.
+class Executor {
+ public:
+  virtual ~Executor() = default;
+  virtual void parallel_for(size_t count, size_t grain, RangeTask task) = 0;
+};
+
+// The built-in executor: `threads - 1` worker threads plus the caller. Used by
+// CollisionWorld when settings.threads > 1 and no executor is given. Workers
+// sleep between jobs; parallel_for does not allocate.
+class ThreadPool final : public Executor {
+ public:
+  explicit ThreadPool(int threads);
+  ~ThreadPool() override;
+  ThreadPool(const ThreadPool&) = delete;
+  ThreadPool& operator=(const ThreadPool&) = delete;
+  void parallel_for(size_t count, size_t grain, RangeTask task) override;
+  int threads() const;
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
+
+// ---- settings and results ----
+
+// When pixel areas (hence depths) are recomputed.
+enum class AreaRefresh {
+  // Default. An object's area is recomputed when it is needed (it is in a
+  // tested pair, or a query reaches it) and its pose, the camera or the LOD
+  // settings changed since it was last computed. With the fixed and screen
+  // policies only objects in tested pairs are computed; thesis needs every
+  // area (its A_min and A_max are global): when anything changed, every live
+  // object's area is recomputed, O(objects) per frame.
+  on_demand,
+  // The simulation layer's historic modes (World): areas of every object
+  // whose WorldTree cell set changed (resp. every object), recomputed at the
+  // start of detect(), whether or not it is in a pair.
+  on_cell_change,
+  every_frame,
+};
+
+struct CollisionSettings {
+  Aabb bounds{{-100, -100, -100}, {100, 100, 100}};  // the WorldTree's box; objects may leave it
+  int world_depth = 4;                               // WorldTree cells per axis = 2^world_depth (0..10)
+  LodSettings lod;
+  Camera camera;
+  AreaRefresh area_refresh = AreaRefresh::on_demand;
+  // Pair tests of a frame run on `executor` when given, else on a built-in
+  // ThreadPool of `threads` threads when threads > 1, else inline. Results
+  // are bit-identical for every choice.
+  int threads = 1;
+  Executor* executor = nullptr;  // not owned; must outlive the world
+};
+
+// What an app can respond with, from the leaf pair that proved the contact.
+struct ContactEstimate {
+  OrientedBox leaf_a, leaf_b;  // the overlapping leaf boxes, in world space
+  Aabb overlap;                // intersection of their world AABBs
+  // Separating-axis estimate between the two leaf boxes: the axis (of the 15
+  // box-box axes) with the least penetration, pointing from a towards b, and
+  // the penetration along it (>= 0). Moving b by normal * penetration (or a
+  // by the opposite) separates these two leaves.
+  Eigen::Vector3d normal{1, 0, 0};
+  double penetration = 0;
+};
+
+struct Contact {
+  ObjectHandle a, b;  // a.slot < b.slot
+  int depth_a = 0, depth_b = 0;  // depths the pair was tested at
+  uint64_t box_tests = 0;
+  ContactEstimate estimate;
+};
+
+struct DetectStats {
+  uint64_t objects = 0;            // live objects
+  uint64_t candidate_pairs = 0;    // WorldTree pairs whose world AABBs overlap
+  uint64_t pair_tests = 0;         // candidate pairs tested with ObjectTrees (== candidate_pairs)
+  uint64_t box_tests = 0;
+  uint64_t contacts = 0;
+  uint64_t area_computations = 0;  // pixel areas computed this frame
+  uint64_t depth_clamps = 0;       // streamed objects tested shallower than asked (memory budget)
+};
+
+struct RayHit {
+  ObjectHandle object;
+  double distance = 0;  // along the normalized direction, from the origin
+  int depth = 0;        // depth the object was tested at
+  BoxCoord box;         // the leaf box hit, at that depth
+};
+
+class CollisionWorld {
+ public:
+  // settings.world_depth is clamped into 0..10; bounds must have a positive
+  // extent on every axis (else it is replaced by the default box).
+  explicit CollisionWorld(CollisionSettings settings);
+  ~CollisionWorld();
+  CollisionWorld(const CollisionWorld&) = delete;
+  CollisionWorld& operator=(const CollisionWorld&) = delete;
+
+  // ---- objects ----
+  // A new object at `pose`. Errors: null tree, bad pose, streamed source
+  // without a cache. The tree must outlive the object.
+  Result<ObjectHandle> create(TreeSource tree, const Pose& pose);
+  Status destroy(ObjectHandle h);
+  bool alive(ObjectHandle h) const;
+  size_t size() const { return live_; }
+  // Position, unit quaternion (|q| within 1e-6 of 1; stored normalized as
+  // given), uniform scale > 0. Cheap when only the position changed, and
+  // a no-op when nothing changed (bitwise): an app may set every pose every
+  // frame.
+  Status set_pose(ObjectHandle h, const Pose& pose);
+  Result<Pose> pose(ObjectHandle h) const;
+
+  // ---- view and LOD ----
+  // Takes effect at the next detect() or query. Setting the same camera (all
+  // fields equal) again does not invalidate any area.
+  void set_camera(const Camera& camera);
+  const Camera& camera() const { return settings_.camera; }
+  // Errors: min_depth < 0 or max_depth < min_depth.
+  Status set_lod(const LodSettings& lod);
+  const LodSettings& lod() const { return settings_.lod; }
+
+  // ---- a frame ----
+  // Replaces `out` with this frame's contacts, sorted by (a.slot, b.slot):
+  //  1. the WorldTree follows the poses set since the last detect();
+  //  2. candidate pairs: objects sharing a WorldTree cell whose world AABBs
+  //     (padded by 1e-9 relative, never rejecting a touching pair) overlap;
+  //  3. depths: the pixel area of every object in a candidate pair (see
+  //     AreaRefresh) and choose_depths, each object's max depth being its
+  //     tree's loaded (fixed) or baked (streamed) depth;
+  //  4. streamed trees: LevelCache::require for every streamed tree used this
+  //     frame, in ascending TreeId order, then each object's depth is clamped
+  //     to its tree's held depth (counted in depth_clamps);
+  //  5. collide() on every candidate pair (in parallel per the settings), hits
+  //     merged in pair order with their ContactEstimate.
+  // Steady state (no new objects, same number of pairs or fewer) allocates
+  // nothing.
+  DetectStats detect(std::vector<Contact>& out);
+
+  // Moves the WorldTree to the poses set so far (detect() starts with it).
+  // Optional: lets the simulation layer (or an app) see world_tree() follow
+  // the poses right away.
+  void commit_poses();
+
+  // The depth object h is tested at in the current state (computed on demand
+  // as detect() would; for thesis, from every object's current area).
+  Result<int> depth(ObjectHandle h);
+  // The pixel area behind depth(h).
+  Result<double> area(ObjectHandle h);
+
+  // ---- queries (current poses and depths; no detect() needed) ----
+  // Nearest hit of the ray origin + t * direction/|direction|, t in
+  // [0, max_distance], among every object's leaf boxes at its current depth.
+  // Conservative: a ray through an occupied leaf box (padded by 1e-9
+  // relative) hits; the distance is that box's entry distance (0 when the
+  // origin is inside). nullopt when nothing is hit. Errors: non-finite
+  // input, zero direction, max_distance < 0.
+  Result<std::optional<RayHit>> ray_cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                                         double max_distance);
+  // Replaces `out` with every object, ascending slot, with a leaf box at its
+  // current depth overlapping the world box (resp. the sphere). Conservative
+  // as above. Errors: non-finite input, min > max, radius < 0.
+  Status overlap_box(const Aabb& box, std::vector<ObjectHandle>& out);
+  Status overlap_sphere(const Eigen::Vector3d& center, double radius, std::vector<ObjectHandle>& out);
+
+  // ---- for the simulation layer and tools ----
+  const WorldTree& world_tree() const { return tree_; }
+  const CollisionSettings& settings() const { return settings_; }
+  // The world AABB (padded) detect() pre-filters with; as of the last
+  // set_pose. Precondition: alive(h).
+  const Aabb& bounds(ObjectHandle h) const { return boxes_[h.slot]; }
+  // Depth and area as last computed (no refresh). Precondition: alive(h).
+  int cached_depth(ObjectHandle h) const { return slots_[h.slot].depth; }
+  double cached_area(ObjectHandle h) const { return slots_[h.slot].area; }
+  // The handle living in `slot`, if any.
+  std::optional<ObjectHandle> handle_at(uint32_t slot) const;
+
+ private:
+  // Hot first: set_pose reads the handle check and the pose (one cache line).
+  struct alignas(64) Slot {
+    uint32_t generation = 0;
+    bool live = false;
+    bool tree_dirty = false;  // WorldTree not yet moved to `box`
+    int depth = 0;
+    Pose pose;
+    Aabb offset;  // world AABB of the tree at (rotation, scale), relative to the position
+    uint64_t area_epoch = 0;  // == epoch_: area/depth match the current pose, camera and LOD
+    double area = 0;
+    TreeSource source;
+  };
+
+  Status check(ObjectHandle h) const;
+  const ObjectTree& tree_of(const Slot& s) const;
+  int max_depth_of(const Slot& s) const;
+  void place_box(uint32_t slot);  // boxes_[slot] from the slot's pose and offset
+  void invalidate_all_areas();
+  // Makes the area and depth of slot i current; returns areas computed.
+  uint64_t refresh_depth(uint32_t i);
+  uint64_t refresh_all_thesis();
+  uint64_t refresh_legacy(bool all);
+  PlacedTree placed(uint32_t i) const;
+  void run_parallel(size_t count, size_t grain, RangeTask task);
+  void test_pairs(size_t begin, size_t end);
+
+  CollisionSettings settings_;
+  uint32_t id_;
+  WorldTree tree_;
+  std::vector<Slot> slots_;
+  std::vector<Aabb> boxes_;  // per slot: world AABB (offset + position, padded); hot in the pair loop
+  std::vector<uint32_t> free_slots_;  // reused LIFO
+  std::vector<uint32_t> dirty_;       // slots whose WorldTree entry is stale
+  size_t live_ = 0;
+  uint64_t epoch_ = 1;                // bumped by set_camera / set_lod
+  bool any_stale_area_ = true;        // thesis: some live area is not fresh
+  bool legacy_all_ = false;           // legacy modes: recompute every area
+  std::vector<uint8_t> cell_changed_;  // on_cell_change: per slot
+
+  // Per frame scratch, kept to avoid allocations.
+  std::vector<std::pair<uint32_t, uint32_t>> pairs_;
+  struct PairResult {
+    PairTest test;
+  };
+  std::vector<PairResult> results_;
+  std::vector<uint32_t> streamed_;  // scratch for the require phase
+  std::vector<double> areas_scratch_;
+  std::vector<int> max_scratch_, depth_scratch_;
+  std::unique_ptr<ThreadPool> pool_;
+  // Temporal coherence hook: per candidate pair state keyed by the two
+  // handles (PairCache) plugs in here, next to results_.
+};
+
+// The SAT estimate between two overlapping oriented boxes (see ContactEstimate).
+ContactEstimate estimate_contact(const OrientedBox& a, const OrientedBox& b);
+
+}  // namespace octbake

@@ -1,0 +1,743 @@
+#include "octbake/collision_world.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cassert>
+#include <cmath>
+#include <condition_variable>
+#include <cstring>
+#include <type_traits>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#if __has_include("octbake/level_cache.h")
+#include "octbake/level_cache.h"
+#define OCTBAKE_HAS_LEVEL_CACHE 1
+#else
+#define OCTBAKE_HAS_LEVEL_CACHE 0
+#endif
+
+namespace octbake {
+
+namespace {
+
+// World AABBs are padded by this fraction of their coordinates' magnitude so
+// that rounding in the pre-filter never rejects a pair collide() would accept
+// (collide() pads its boxes too). Same rule as the historic World.
+constexpr double kRelativePad = 1e-9;
+constexpr int kMaxTreeDepth = 12;  // collide()'s limit
+constexpr size_t kPairGrain = 64;  // pairs per parallel chunk
+
+std::atomic<uint32_t> g_next_world_id{1};
+
+bool overlaps(const Aabb& a, const Aabb& b) {
+  return (a.min.array() <= b.max.array()).all() && (b.min.array() <= a.max.array()).all();
+}
+
+Error bad(std::string why) { return Error{ErrorCode::invalid_argument, std::move(why)}; }
+
+Status check_pose(const Pose& p) {
+  if (!p.position.allFinite()) return bad("pose: position is not finite");
+  if (!std::isfinite(p.scale) || !(p.scale > 0)) return bad("pose: scale must be finite and > 0");
+  if (!p.rotation.coeffs().allFinite() || !(std::abs(p.rotation.norm() - 1) < 1e-6))
+    return bad("pose: rotation is not a unit quaternion");
+  return std::monostate{};
+}
+
+bool same_camera(const Camera& a, const Camera& b) {
+  return a.position == b.position && a.look_at == b.look_at && a.up == b.up && a.fov_y_deg == b.fov_y_deg &&
+         a.viewport_w == b.viewport_w && a.viewport_h == b.viewport_h && a.near_plane == b.near_plane &&
+         a.far_plane == b.far_plane;
+}
+
+// choose_depths for one object (same rule, no allocation).
+int depth_for(const LodSettings& s, double area, double a_min, double a_max, int max_depth) {
+  const int hi = std::max(0, std::min(s.max_depth, max_depth));
+  const int lo = std::clamp(s.min_depth, 0, hi);
+  switch (s.policy) {
+    case LodPolicy::fixed: return hi;
+    case LodPolicy::thesis: return thesis_depth(area, a_min, a_max, lo, hi);
+    case LodPolicy::screen: return screen_depth(area, lo, hi, s.pixel_tolerance);
+  }
+  return hi;
+}
+
+// Bitwise equality (0.0 and -0.0 differ): "unchanged" must mean unchanged.
+template <class T>
+bool same_bits(const T& a, const T& b) {
+  if constexpr (std::is_floating_point_v<T>)
+    return std::memcmp(&a, &b, sizeof a) == 0;
+  else
+    return std::memcmp(a.data(), b.data(), sizeof(double) * size_t(a.size())) == 0;
+}
+
+double max_abs(const Eigen::Vector3d& v) { return v.cwiseAbs().maxCoeff(); }
+
+// Local-space box of `c` at depth d, padded by `pad` on every side.
+Aabb node_box(const Aabb& root, int d, uint32_t x, uint32_t y, uint32_t z, double pad) {
+  const Eigen::Vector3d size = (root.max - root.min) / double(uint64_t{1} << d);
+  const Eigen::Vector3d lo = root.min + size.cwiseProduct(Eigen::Vector3d(x, y, z));
+  return {lo.array() - pad, (lo + size).array() + pad};
+}
+
+// Entry distance of the ray o + t*dir into `b`, within [t0, t1]; < 0 = miss.
+double ray_box(const Eigen::Vector3d& o, const Eigen::Vector3d& dir, const Aabb& b, double t0, double t1) {
+  for (int k = 0; k < 3; ++k) {
+    if (dir[k] == 0) {
+      if (o[k] < b.min[k] || o[k] > b.max[k]) return -1;
+      continue;
+    }
+    double ta = (b.min[k] - o[k]) / dir[k], tb = (b.max[k] - o[k]) / dir[k];
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+    if (!(t0 <= t1)) return -1;
+  }
+  return t0;
+}
+
+// Separating-axis test of two oriented boxes on the 15 candidate axes: the
+// axis of least overlap (pointing from a to b) and that overlap (< 0 when
+// separated along it by more than nothing).
+struct Sat {
+  Eigen::Vector3d axis{1, 0, 0};
+  double overlap = 0;
+};
+Sat sat(const OrientedBox& a, const OrientedBox& b) {
+  Sat best;
+  best.overlap = std::numeric_limits<double>::infinity();
+  const Eigen::Vector3d t = b.center - a.center;
+  auto try_axis = [&](Eigen::Vector3d l) {
+    const double n = l.norm();
+    if (!(n > 1e-9)) return;  // near-parallel edges: no new axis
+    l /= n;
+    const double ra = (a.axes.transpose() * l).cwiseAbs().dot(a.half);
+    const double rb = (b.axes.transpose() * l).cwiseAbs().dot(b.half);
+    const double dist = t.dot(l);
+    const double overlap = ra + rb - std::abs(dist);
+    if (overlap < best.overlap) {
+      best.overlap = overlap;
+      best.axis = dist < 0 ? Eigen::Vector3d(-l) : l;
+    }
+  };
+  for (int i = 0; i < 3; ++i) try_axis(a.axes.col(i));
+  for (int i = 0; i < 3; ++i) try_axis(b.axes.col(i));
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) try_axis(a.axes.col(i).cross(b.axes.col(j)));
+  return best;
+}
+
+void run_inline(size_t count, RangeTask task) {
+  if (count > 0) task(0, count);
+}
+
+}  // namespace
+
+ContactEstimate estimate_contact(const OrientedBox& a, const OrientedBox& b) {
+  ContactEstimate e;
+  e.leaf_a = a;
+  e.leaf_b = b;
+  const Aabb wa = world_bounds(a), wb = world_bounds(b);
+  e.overlap = {wa.min.cwiseMax(wb.min), wa.max.cwiseMin(wb.max)};
+  const Sat s = sat(a, b);
+  e.normal = s.axis;
+  e.penetration = std::max(0.0, s.overlap);
+  return e;
+}
+
+// ---- ThreadPool ----
+
+struct ThreadPool::State {
+  std::mutex mutex;
+  std::condition_variable work, done;
+  std::vector<std::thread> workers;
+  RangeTask task;
+  size_t count = 0, grain = 1;
+  std::atomic<size_t> next{0};
+  size_t active = 0;
+  uint64_t job = 0;
+  bool stop = false;
+
+  void run_chunks() {
+    for (;;) {
+      const size_t begin = next.fetch_add(grain);
+      if (begin >= count) return;
+      task(begin, std::min(count, begin + grain));
+    }
+  }
+  void worker() {
+    uint64_t seen = 0;
+    for (;;) {
+      {
+        std::unique_lock lock(mutex);
+        work.wait(lock, [&] { return stop || job != seen; });
+        if (stop) return;
+        seen = job;
+      }
+      run_chunks();
+      std::lock_guard lock(mutex);
+      if (--active == 0) done.notify_one();
+    }
+  }
+};
+
+ThreadPool::ThreadPool(int threads) : state_(std::make_unique<State>()) {
+  for (int i = 1; i < threads; ++i) state_->workers.emplace_back([s = state_.get()] { s->worker(); });
+}
+
+ThreadPool::~ThreadPool() {
+  {
+    std::lock_guard lock(state_->mutex);
+    state_->stop = true;
+  }
+  state_->work.notify_all();
+  for (std::thread& t : state_->workers) t.join();
+}
+
+int ThreadPool::threads() const { return int(state_->workers.size()) + 1; }
+
+void ThreadPool::parallel_for(size_t count, size_t grain, RangeTask task) {
+  State& s = *state_;
+  grain = std::max<size_t>(grain, 1);
+  if (s.workers.empty() || count <= grain) return run_inline(count, task);
+  {
+    std::lock_guard lock(s.mutex);
+    s.task = task;
+    s.count = count;
+    s.grain = grain;
+    s.next.store(0);
+    s.active = s.workers.size();
+    ++s.job;
+  }
+  s.work.notify_all();
+  s.run_chunks();
+  std::unique_lock lock(s.mutex);
+  s.done.wait(lock, [&] { return s.active == 0; });
+}
+
+// ---- CollisionWorld ----
+
+CollisionWorld::CollisionWorld(CollisionSettings settings)
+    : settings_(std::move(settings)),
+      id_(g_next_world_id.fetch_add(1)),
+      tree_((settings_.bounds.min.array() < settings_.bounds.max.array()).all() && settings_.bounds.min.allFinite() &&
+                    settings_.bounds.max.allFinite()
+                ? settings_.bounds
+                : CollisionSettings{}.bounds,
+            std::clamp(settings_.world_depth, 0, 10)) {
+  settings_.bounds = tree_.bounds();
+  settings_.world_depth = tree_.depth();
+  if (!settings_.executor && settings_.threads > 1) pool_ = std::make_unique<ThreadPool>(settings_.threads);
+}
+
+CollisionWorld::~CollisionWorld() = default;
+
+Status CollisionWorld::check(ObjectHandle h) const {
+  if (h.world != id_) return bad("handle: belongs to another CollisionWorld (or was never issued)");
+  if (h.slot >= slots_.size() || h.generation == 0) return bad("handle: no such object");
+  const Slot& s = slots_[h.slot];
+  if (!s.live || s.generation != h.generation) return bad("handle: object was destroyed");
+  return std::monostate{};
+}
+
+bool CollisionWorld::alive(ObjectHandle h) const { return check(h).ok(); }
+
+std::optional<ObjectHandle> CollisionWorld::handle_at(uint32_t slot) const {
+  if (slot >= slots_.size() || !slots_[slot].live) return std::nullopt;
+  return ObjectHandle{slot, slots_[slot].generation, id_};
+}
+
+const ObjectTree& CollisionWorld::tree_of(const Slot& s) const {
+#if OCTBAKE_HAS_LEVEL_CACHE
+  if (s.source.cache) return s.source.cache->tree(s.source.id);
+#endif
+  return *s.source.tree;
+}
+
+int CollisionWorld::max_depth_of(const Slot& s) const {
+#if OCTBAKE_HAS_LEVEL_CACHE
+  if (s.source.cache) return std::min(s.source.cache->baked_depth(s.source.id), kMaxTreeDepth);
+#endif
+  return std::min(s.source.tree->loaded_depth(), kMaxTreeDepth);
+}
+
+void CollisionWorld::place_box(uint32_t i) {
+  const Slot& s = slots_[i];
+  const Eigen::Vector3d& p = s.pose.position;
+  const Aabb& off = s.offset;
+  const double pad = kRelativePad * (max_abs(p) + std::max(max_abs(off.min), max_abs(off.max)));
+  boxes_[i].min = (p + off.min).array() - pad;
+  boxes_[i].max = (p + off.max).array() + pad;
+}
+
+Result<ObjectHandle> CollisionWorld::create(TreeSource source, const Pose& pose) {
+  if (source.cache) {
+#if !OCTBAKE_HAS_LEVEL_CACHE
+    return bad("create: streamed trees need octbake/level_cache.h (not in this build)");
+#endif
+  } else if (!source.tree) {
+    return bad("create: null tree");
+  }
+  if (Status st = check_pose(pose); !st) return st.error();
+  if (slots_.size() >= (size_t{1} << 31) && free_slots_.empty()) return bad("create: too many objects");
+  uint32_t i;
+  if (!free_slots_.empty()) {
+    i = free_slots_.back();
+    free_slots_.pop_back();
+  } else {
+    i = uint32_t(slots_.size());
+    slots_.emplace_back();
+    cell_changed_.push_back(0);
+    boxes_.emplace_back();
+  }
+  Slot& s = slots_[i];
+  const uint32_t generation = s.generation + 1 == 0 ? 1 : s.generation + 1;
+  s = Slot{};
+  s.generation = generation;
+  s.source = source;
+  s.live = true;
+  s.pose = pose;
+  Pose at_origin = pose;
+  at_origin.position.setZero();
+  s.offset = world_bounds(place(tree_of(s).bounds(), at_origin));
+  place_box(i);
+  s.tree_dirty = true;
+  dirty_.push_back(i);
+  cell_changed_[i] = 1;
+  any_stale_area_ = true;
+  ++live_;
+  return ObjectHandle{i, generation, id_};
+}
+
+Status CollisionWorld::destroy(ObjectHandle h) {
+  if (Status st = check(h); !st) return st;
+  Slot& s = slots_[h.slot];
+  tree_.remove(h.slot);
+  s.live = false;
+  s.tree_dirty = false;  // a stale entry in dirty_ is skipped
+  free_slots_.push_back(h.slot);
+  --live_;
+  any_stale_area_ = true;  // thesis: A_min / A_max may change
+  return std::monostate{};
+}
+
+Status CollisionWorld::set_pose(ObjectHandle h, const Pose& pose) {
+  if (Status st = check(h); !st) return st;
+  Slot& s = slots_[h.slot];
+  const bool same_frame = same_bits(pose.rotation.coeffs(), s.pose.rotation.coeffs()) && same_bits(pose.scale, s.pose.scale);
+  // An app that sets every pose every frame pays almost nothing for the
+  // objects that did not move (their pose was checked when it was set).
+  if (same_frame && same_bits(pose.position, s.pose.position)) return std::monostate{};
+  if (Status st = check_pose(pose); !st) return st;
+  if (!same_frame) {
+    Pose at_origin = pose;
+    at_origin.position.setZero();
+    s.offset = world_bounds(place(tree_of(s).bounds(), at_origin));
+  }
+  s.pose = pose;
+  place_box(h.slot);
+  if (!s.tree_dirty) {
+    s.tree_dirty = true;
+    dirty_.push_back(h.slot);
+  }
+  if (settings_.area_refresh == AreaRefresh::on_demand) {
+    s.area_epoch = 0;
+    any_stale_area_ = true;
+  }
+  return std::monostate{};
+}
+
+Result<Pose> CollisionWorld::pose(ObjectHandle h) const {
+  if (Status st = check(h); !st) return st.error();
+  return slots_[h.slot].pose;
+}
+
+// O(1): a new epoch makes every area stale (set_camera runs every frame).
+void CollisionWorld::invalidate_all_areas() {
+  ++epoch_;
+  legacy_all_ = true;
+  any_stale_area_ = true;
+}
+
+void CollisionWorld::set_camera(const Camera& camera) {
+  if (same_camera(camera, settings_.camera)) return;
+  settings_.camera = camera;
+  invalidate_all_areas();
+}
+
+Status CollisionWorld::set_lod(const LodSettings& lod) {
+  if (lod.min_depth < 0 || lod.max_depth < lod.min_depth) return bad("lod: need 0 <= min_depth <= max_depth");
+  if (!(lod.pixel_tolerance > 0)) return bad("lod: pixel_tolerance must be > 0");
+  settings_.lod = lod;
+  invalidate_all_areas();
+  return std::monostate{};
+}
+
+uint64_t CollisionWorld::refresh_depth(uint32_t i) {
+  if (settings_.lod.policy == LodPolicy::thesis) return refresh_all_thesis();
+  Slot& s = slots_[i];
+  if (s.area_epoch == epoch_) return 0;
+  uint64_t computed = 0;
+  // The fixed policy does not look at the area: it is not computed.
+  if (settings_.lod.policy != LodPolicy::fixed) {
+    s.area = pixel_area(settings_.camera, place(tree_of(s).bounds(), s.pose));
+    computed = 1;
+  }
+  s.depth = depth_for(settings_.lod, s.area, 0, 0, max_depth_of(s));
+  s.area_epoch = epoch_;
+  return computed;
+}
+
+uint64_t CollisionWorld::refresh_all_thesis() {
+  if (!any_stale_area_) return 0;
+  uint64_t computed = 0;
+  double a_min = std::numeric_limits<double>::infinity(), a_max = -a_min;
+  for (Slot& s : slots_) {
+    if (!s.live) continue;
+    if (s.area_epoch != epoch_) {
+      s.area = pixel_area(settings_.camera, place(tree_of(s).bounds(), s.pose));
+      s.area_epoch = epoch_;
+      ++computed;
+    }
+    a_min = std::min(a_min, s.area);
+    a_max = std::max(a_max, s.area);
+  }
+  for (Slot& s : slots_)
+    if (s.live) s.depth = depth_for(settings_.lod, s.area, a_min, a_max, max_depth_of(s));
+  any_stale_area_ = false;
+  return computed;
+}
+
+// The historic World rule: recompute the stale (or all) areas now; depths of
+// the recomputed objects, or of every object when thesis or `all`.
+uint64_t CollisionWorld::refresh_legacy(bool all) {
+  all = all || legacy_all_;  // the camera or the LOD changed
+  legacy_all_ = false;
+  uint64_t computed = 0;
+  for (uint32_t i = 0; i < slots_.size(); ++i) {
+    Slot& s = slots_[i];
+    if (!s.live || (!all && !cell_changed_[i])) continue;
+    s.area = pixel_area(settings_.camera, place(tree_of(s).bounds(), s.pose));
+    cell_changed_[i] = 0;
+    s.area_epoch = epoch_;  // marks "recomputed now" for the depth pass below
+    ++computed;
+  }
+  if (computed == 0) return 0;
+  const bool every = all || settings_.lod.policy == LodPolicy::thesis;
+  double a_min = 0, a_max = 0;
+  if (every) {
+    a_min = std::numeric_limits<double>::infinity(), a_max = -a_min;
+    for (const Slot& s : slots_)
+      if (s.live) a_min = std::min(a_min, s.area), a_max = std::max(a_max, s.area);
+  }
+  for (Slot& s : slots_) {
+    if (!s.live || !(every || s.area_epoch == epoch_)) continue;
+    s.depth = std::clamp(depth_for(settings_.lod, s.area, a_min, a_max, max_depth_of(s)), 0, max_depth_of(s));
+    s.area_epoch = 0;
+  }
+  return computed;
+}
+
+Result<int> CollisionWorld::depth(ObjectHandle h) {
+  if (Status st = check(h); !st) return st.error();
+  if (settings_.area_refresh == AreaRefresh::on_demand) refresh_depth(h.slot);
+  return slots_[h.slot].depth;
+}
+
+Result<double> CollisionWorld::area(ObjectHandle h) {
+  if (Status st = check(h); !st) return st.error();
+  Slot& s = slots_[h.slot];
+  if (settings_.area_refresh == AreaRefresh::on_demand) {
+    refresh_depth(h.slot);
+    if (settings_.lod.policy == LodPolicy::fixed)
+      s.area = pixel_area(settings_.camera, place(tree_of(s).bounds(), s.pose));
+  }
+  return s.area;
+}
+
+PlacedTree CollisionWorld::placed(uint32_t i) const {
+  const Slot& s = slots_[i];
+  return {&tree_of(s), s.pose, s.depth};
+}
+
+void CollisionWorld::run_parallel(size_t count, size_t grain, RangeTask task) {
+  if (settings_.executor)
+    settings_.executor->parallel_for(count, grain, task);
+  else if (pool_)
+    pool_->parallel_for(count, grain, task);
+  else
+    run_inline(count, task);
+}
+
+void CollisionWorld::test_pairs(size_t begin, size_t end) {
+  for (size_t k = begin; k < end; ++k) {
+    const auto [a, b] = pairs_[k];
+    results_[k].test = collide(placed(a), placed(b));
+  }
+}
+
+void CollisionWorld::commit_poses() {
+  for (uint32_t i : dirty_) {
+    Slot& s = slots_[i];
+    if (!s.live || !s.tree_dirty) continue;
+    s.tree_dirty = false;
+    if (tree_.update(i, boxes_[i])) cell_changed_[i] = 1;
+  }
+  dirty_.clear();
+}
+
+DetectStats CollisionWorld::detect(std::vector<Contact>& out) {
+  DetectStats stats;
+  stats.objects = live_;
+  out.clear();
+
+  // 1. The WorldTree follows the poses.
+  commit_poses();
+
+  // 2. Legacy LOD modes compute their areas before the pairs.
+  if (settings_.area_refresh != AreaRefresh::on_demand)
+    stats.area_computations = refresh_legacy(settings_.area_refresh == AreaRefresh::every_frame);
+
+  // 3. Candidate pairs, pre-filtered by world AABBs.
+  tree_.candidate_pairs(pairs_);
+  size_t n = 0;
+  for (const auto& p : pairs_)
+    if (overlaps(boxes_[p.first], boxes_[p.second])) pairs_[n++] = p;
+  pairs_.resize(n);
+  stats.candidate_pairs = stats.pair_tests = n;
+
+  // 4. Depths of the objects in pairs.
+  if (settings_.area_refresh == AreaRefresh::on_demand) {
+    if (settings_.lod.policy == LodPolicy::thesis) {
+      if (n > 0) stats.area_computations = refresh_all_thesis();
+    } else {
+      for (const auto& [a, b] : pairs_) stats.area_computations += refresh_depth(a) + refresh_depth(b);
+    }
+  }
+
+#if OCTBAKE_HAS_LEVEL_CACHE
+  // 5. Streamed trees: decode what the depths ask for, in TreeId order, then
+  // clamp to what is held after every require (a later require may evict).
+  streamed_.clear();
+  for (const auto& [a, b] : pairs_)
+    for (uint32_t i : {a, b})
+      if (slots_[i].source.cache) streamed_.push_back(i);
+  if (!streamed_.empty()) {
+    std::sort(streamed_.begin(), streamed_.end(), [&](uint32_t x, uint32_t y) {
+      const Slot &sx = slots_[x], &sy = slots_[y];
+      if (sx.source.cache != sy.source.cache) return std::less<>()(sx.source.cache, sy.source.cache);
+      if (sx.source.id != sy.source.id) return sx.source.id < sy.source.id;
+      return x < y;
+    });
+    streamed_.erase(std::unique(streamed_.begin(), streamed_.end()), streamed_.end());
+    for (size_t k = 0; k < streamed_.size();) {
+      const Slot& first = slots_[streamed_[k]];
+      int deepest = 0;
+      size_t e = k;
+      for (; e < streamed_.size() && slots_[streamed_[e]].source.cache == first.source.cache &&
+             slots_[streamed_[e]].source.id == first.source.id;
+           ++e)
+        deepest = std::max(deepest, slots_[streamed_[e]].depth);
+      (void)first.source.cache->require(first.source.id, deepest);
+      k = e;
+    }
+    for (uint32_t i : streamed_) {
+      Slot& s = slots_[i];
+      const int held = s.source.cache->held_depth(s.source.id);
+      if (s.depth > held) {
+        s.depth = held;
+        s.area_epoch = 0;  // ask again next frame
+        ++stats.depth_clamps;
+      }
+    }
+  }
+#endif
+
+  // 6. Pair tests, one result slot per pair, merged in pair order.
+  results_.resize(n);
+  run_parallel(n, kPairGrain,
+               {[](const void* self, size_t b, size_t e) {
+                  const_cast<CollisionWorld*>(static_cast<const CollisionWorld*>(self))->test_pairs(b, e);
+                },
+                this});
+  for (size_t k = 0; k < n; ++k) {
+    const PairTest& t = results_[k].test;
+    stats.box_tests += t.box_tests;
+    if (!t.hit) continue;
+    const auto [a, b] = pairs_[k];
+    const PlacedTree pa = placed(a), pb = placed(b);
+    Contact c;
+    c.a = {a, slots_[a].generation, id_};
+    c.b = {b, slots_[b].generation, id_};
+    c.depth_a = pa.depth;
+    c.depth_b = pb.depth;
+    c.box_tests = t.box_tests;
+    c.estimate = estimate_contact(leaf_box(pa, t.leaf.a), leaf_box(pb, t.leaf.b));
+    out.push_back(c);
+  }
+  stats.contacts = out.size();
+  return stats;
+}
+
+// ---- queries ----
+
+namespace {
+
+// Ray or shape query inside one object's tree, depth first, children in
+// octant order. `visit_leaf` returns true to stop.
+struct Node {
+  int d;
+  uint32_t index, x, y, z;
+};
+
+}  // namespace
+
+Result<std::optional<RayHit>> CollisionWorld::ray_cast(const Eigen::Vector3d& origin,
+                                                       const Eigen::Vector3d& direction, double max_distance) {
+  if (!origin.allFinite() || !direction.allFinite() || !(max_distance >= 0) || std::isnan(max_distance))
+    return bad("ray_cast: non-finite origin or direction, or max_distance < 0");
+  const double len = direction.norm();
+  if (!(len > 0) || !std::isfinite(len)) return bad("ray_cast: zero direction");
+  const Eigen::Vector3d dir = direction / len;
+  std::optional<RayHit> best;
+  double best_t = max_distance;
+  for (uint32_t i = 0; i < slots_.size(); ++i) {
+    if (!slots_[i].live) continue;
+    const double t_box = ray_box(origin, dir, boxes_[i], 0, best_t);
+    if (t_box < 0) continue;
+    if (settings_.area_refresh == AreaRefresh::on_demand) refresh_depth(i);
+    const Slot& s = slots_[i];
+    const ObjectTree& tree = tree_of(s);
+    // Start the local ray where it enters the world box: local coordinates
+    // stay small even for objects 1e7 away.
+    const Eigen::Vector3d start = origin + dir * t_box;
+    const Eigen::Matrix3d rt = s.pose.rotation.toRotationMatrix().transpose();
+    const Eigen::Vector3d o = rt * (start - s.pose.position) / s.pose.scale;
+    const Eigen::Vector3d dl = rt * dir / s.pose.scale;
+    const Aabb& root = tree.bounds();
+    // Rounding of start, of the transform and of the box corners, in local units.
+    const double world_mag = max_abs(origin) + max_abs(s.pose.position) + t_box;
+    const double pad = kRelativePad * (std::max(max_abs(root.min), max_abs(root.max)) + max_abs(o)) +
+                       1e-12 * world_mag / s.pose.scale;
+    const double limit = best_t - t_box;
+    double local_best = limit;
+    bool found = false;
+    BoxCoord hit_box;
+    Node stack[8 * kMaxTreeDepth + 8];
+    int top = 0;
+    stack[top++] = {0, 0, 0, 0, 0};
+    while (top > 0) {
+      const Node nd = stack[--top];
+      const double t = ray_box(o, dl, node_box(root, nd.d, nd.x, nd.y, nd.z, pad), 0, local_best);
+      if (t < 0) continue;
+      if (nd.d == s.depth) {
+        if (!found || t < local_best) {  // ties: the first in octant order
+          local_best = t;
+          hit_box = {nd.x, nd.y, nd.z};
+          found = true;
+        }
+        continue;
+      }
+      const uint8_t m = tree.mask(nd.d, nd.index);
+      uint32_t child = tree.first_child(nd.d, nd.index);
+      // Push in reverse octant order so octant 0 is visited first.
+      Node kids[8];
+      int nk = 0;
+      for (int j = 0; j < 8; ++j)
+        if (m & (1u << j))
+          kids[nk++] = {nd.d + 1, child++, 2 * nd.x + (j & 1), 2 * nd.y + ((j >> 1) & 1), 2 * nd.z + ((j >> 2) & 1)};
+      for (int k = nk - 1; k >= 0; --k) stack[top++] = kids[k];
+    }
+    if (!found) continue;
+    const double t = t_box + local_best;
+    if (!best || t < best_t) {
+      best_t = t;
+      best = RayHit{{i, s.generation, id_}, t, s.depth, hit_box};
+    }
+  }
+  return best;
+}
+
+namespace {
+
+// Does any leaf (at `depth`) of `tree` overlap the local-space shape?
+template <class Overlaps>
+bool any_leaf(const ObjectTree& tree, int depth, double pad, const Overlaps& overlaps_box) {
+  const Aabb& root = tree.bounds();
+  Node stack[8 * kMaxTreeDepth + 8];
+  int top = 0;
+  stack[top++] = {0, 0, 0, 0, 0};
+  while (top > 0) {
+    const Node nd = stack[--top];
+    if (!overlaps_box(node_box(root, nd.d, nd.x, nd.y, nd.z, pad))) continue;
+    if (nd.d == depth) return true;
+    const uint8_t m = tree.mask(nd.d, nd.index);
+    uint32_t child = tree.first_child(nd.d, nd.index);
+    for (int j = 0; j < 8; ++j)
+      if (m & (1u << j))
+        stack[top++] = {nd.d + 1, child++, 2 * nd.x + (j & 1), 2 * nd.y + ((j >> 1) & 1), 2 * nd.z + ((j >> 2) & 1)};
+  }
+  return false;
+}
+
+OrientedBox as_oriented(const Aabb& b) {
+  OrientedBox o;
+  o.center = 0.5 * (b.min + b.max);
+  o.half = 0.5 * (b.max - b.min);
+  return o;
+}
+
+}  // namespace
+
+Status CollisionWorld::overlap_box(const Aabb& box, std::vector<ObjectHandle>& out) {
+  out.clear();
+  if (!box.min.allFinite() || !box.max.allFinite() || !(box.min.array() <= box.max.array()).all())
+    return bad("overlap_box: non-finite box or min > max");
+  for (uint32_t i = 0; i < slots_.size(); ++i) {
+    if (!slots_[i].live || !overlaps(boxes_[i], box)) continue;
+    if (settings_.area_refresh == AreaRefresh::on_demand) refresh_depth(i);
+    const Slot& s = slots_[i];
+    // The query box in the object's local frame.
+    const Eigen::Matrix3d rt = s.pose.rotation.toRotationMatrix().transpose();
+    OrientedBox q = as_oriented(box);
+    q.center = rt * (q.center - s.pose.position) / s.pose.scale;
+    q.axes = rt;
+    q.half /= s.pose.scale;
+    const Aabb& root = tree_of(s).bounds();
+    const double world_mag = max_abs(box.min) + max_abs(box.max) + max_abs(s.pose.position);
+    const double pad = kRelativePad * (std::max(max_abs(root.min), max_abs(root.max)) + max_abs(q.center) +
+                                       q.half.maxCoeff()) +
+                       1e-12 * world_mag / s.pose.scale;
+    if (any_leaf(tree_of(s), s.depth, pad, [&](const Aabb& node) { return sat(as_oriented(node), q).overlap >= 0; }))
+      out.push_back({i, s.generation, id_});
+  }
+  return std::monostate{};
+}
+
+Status CollisionWorld::overlap_sphere(const Eigen::Vector3d& center, double radius, std::vector<ObjectHandle>& out) {
+  out.clear();
+  if (!center.allFinite() || !std::isfinite(radius) || !(radius >= 0))
+    return bad("overlap_sphere: non-finite center or radius, or radius < 0");
+  const Aabb bounds{center.array() - radius, center.array() + radius};
+  for (uint32_t i = 0; i < slots_.size(); ++i) {
+    if (!slots_[i].live || !overlaps(boxes_[i], bounds)) continue;
+    if (settings_.area_refresh == AreaRefresh::on_demand) refresh_depth(i);
+    const Slot& s = slots_[i];
+    const Eigen::Matrix3d rt = s.pose.rotation.toRotationMatrix().transpose();
+    const Eigen::Vector3d c = rt * (center - s.pose.position) / s.pose.scale;
+    const double r = radius / s.pose.scale;
+    const Aabb& root = tree_of(s).bounds();
+    const double world_mag = max_abs(center) + radius + max_abs(s.pose.position);
+    const double pad =
+        kRelativePad * (std::max(max_abs(root.min), max_abs(root.max)) + max_abs(c) + r) + 1e-12 * world_mag / s.pose.scale;
+    if (any_leaf(tree_of(s), s.depth, pad, [&](const Aabb& node) {
+          const Eigen::Vector3d closest = c.cwiseMax(node.min).cwiseMin(node.max);
+          return (closest - c).norm() <= r;
+        }))
+      out.push_back({i, s.generation, id_});
+  }
+  return std::monostate{};
+}
+
+}  // namespace octbake

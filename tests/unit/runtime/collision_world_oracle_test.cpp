@@ -1,0 +1,262 @@
+// CollisionWorld::detect against brute force: random sequences of create /
+// destroy / set_pose / set_camera / set_lod, every frame's contacts equal to
+// collide() on every pair of live objects at the depths the world chose, and
+// those depths equal to choose_depths over freshly computed pixel areas.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <map>
+#include <set>
+
+#include "collision_world_util.h"
+
+namespace octbake {
+namespace {
+
+using test::below;
+using test::kWork;
+using test::uniform;
+
+struct Totals {
+  uint64_t frames = 0, pair_tests = 0, contacts = 0, far_contacts = 0, outside_contacts = 0;
+  uint64_t hash = 1469598103934665603ull;
+  template <class T>
+  void mix(const T& v) {
+    unsigned char b[sizeof(T)];
+    std::memcpy(b, &v, sizeof(T));
+    for (unsigned char c : b) hash = (hash ^ c) * 1099511628211ull;
+  }
+};
+
+// A world of random trees driven by random calls. `check` runs the oracles
+// every frame (else only the hash of the results is kept).
+class Driver {
+ public:
+  Driver(uint32_t seed, int threads, Executor* executor) : rng_(seed), trees_(test::random_trees(rng_, 5)) {
+    CollisionSettings s;
+    s.bounds = {Eigen::Vector3d::Constant(-10), Eigen::Vector3d::Constant(10)};
+    s.world_depth = 3;
+    s.lod.policy = LodPolicy::screen;
+    s.lod.max_depth = 5;
+    s.lod.pixel_tolerance = 4;
+    s.threads = threads;
+    s.executor = executor;
+    world_ = std::make_unique<CollisionWorld>(s);
+  }
+
+  Pose random_pose() {
+    Pose p;
+    const uint32_t where = below(rng_, 10);
+    if (where == 0)
+      // Outside the world box [-10, 10]^3: just beyond a face, or far away.
+      p.position = (below(rng_, 2) ? Eigen::Vector3d(14, 0, 0) : Eigen::Vector3d(-45, 45, -45)) +
+                   test::random_point(rng_, -2, 2);
+    else if (where == 1)
+      p.position = Eigen::Vector3d(1e7, -1e7, 1e7) + test::random_point(rng_, -2, 2);  // huge offset
+    else
+      p.position = test::random_point(rng_, -6, 6);
+    p.rotation = test::maybe_rotation(rng_);
+    p.scale = uniform(rng_, 0.05, 0.15);
+    return p;
+  }
+
+  void random_calls() {
+    const int calls = 1 + int(below(rng_, 4));
+    for (int k = 0; k < calls; ++k) {
+      const uint32_t op = below(rng_, 10);
+      if ((op < 2 && live_.size() < 40) || live_.size() < 3) {
+        const ObjectTree* t = &trees_[below(rng_, uint32_t(trees_.size()))];
+        Result<ObjectHandle> h = world_->create(TreeSource::fixed(t), random_pose());
+        ASSERT_TRUE(h.ok());
+        live_.push_back(*h);
+        tree_of_[h->slot] = t;
+      } else if (op == 2) {
+        const size_t i = below(rng_, uint32_t(live_.size()));
+        ASSERT_TRUE(world_->destroy(live_[i]).ok());
+        live_.erase(live_.begin() + ptrdiff_t(i));
+      } else {
+        const ObjectHandle h = live_[below(rng_, uint32_t(live_.size()))];
+        Pose p = world_->pose(h).value();
+        if (below(rng_, 3) == 0) {
+          p = random_pose();
+        } else {
+          p.position += test::random_point(rng_, -0.4, 0.4);
+          if (below(rng_, 2) == 0) p.rotation = test::random_rotation(rng_);
+        }
+        ASSERT_TRUE(world_->set_pose(h, p).ok());
+      }
+    }
+    if (below(rng_, 10) != 0) {  // the camera moves most frames
+      Camera c;
+      c.position = test::random_point(rng_, -40, 40);
+      c.look_at = test::random_point(rng_, -5, 5);
+      world_->set_camera(c);
+    }
+    if (below(rng_, 50) == 0) {
+      LodSettings lod;
+      lod.policy = LodPolicy(below(rng_, 3));
+      lod.min_depth = int(below(rng_, 3));
+      lod.max_depth = lod.min_depth + int(below(rng_, 4));
+      lod.pixel_tolerance = uniform(rng_, 0.5, 8);
+      ASSERT_TRUE(world_->set_lod(lod).ok());
+    }
+  }
+
+  PlacedTree placed(ObjectHandle h, int depth) { return {tree_of_[h.slot], world_->pose(h).value(), depth}; }
+
+  void frame(bool check, Totals& totals) {
+    ASSERT_NO_FATAL_FAILURE(random_calls());
+    const DetectStats stats = world_->detect(contacts_);
+    ++totals.frames;
+    totals.pair_tests += stats.pair_tests;
+    totals.contacts += stats.contacts;
+    for (const Contact& c : contacts_) {
+      totals.mix(c.a.slot), totals.mix(c.a.generation), totals.mix(c.b.slot), totals.mix(c.b.generation), totals.mix(c.depth_a), totals.mix(c.depth_b), totals.mix(c.box_tests);
+      totals.mix(c.estimate.normal), totals.mix(c.estimate.penetration), totals.mix(c.estimate.overlap);
+    }
+    totals.mix(stats.box_tests), totals.mix(stats.area_computations);
+    if (!check) return;
+
+    std::vector<ObjectHandle> sorted = live_;
+    std::sort(sorted.begin(), sorted.end(), [](auto x, auto y) { return x.slot < y.slot; });
+    ASSERT_EQ(stats.objects, sorted.size());
+
+    // Depths of the objects in candidate pairs (world AABBs overlap) are
+    // choose_depths over fresh pixel areas, read before anything refreshes.
+    std::set<uint32_t> in_pairs;
+    uint64_t candidates = 0;
+    for (size_t i = 0; i < sorted.size(); ++i)
+      for (size_t j = i + 1; j < sorted.size(); ++j) {
+        const Aabb &a = world_->bounds(sorted[i]), &b = world_->bounds(sorted[j]);
+        if ((a.min.array() <= b.max.array()).all() && (b.min.array() <= a.max.array()).all())
+          in_pairs.insert(sorted[i].slot), in_pairs.insert(sorted[j].slot), ++candidates;
+      }
+    ASSERT_EQ(stats.candidate_pairs, candidates);
+    const LodSettings& lod = world_->lod();
+    std::vector<double> areas;
+    std::vector<int> max_depths;
+    for (ObjectHandle h : sorted) {
+      areas.push_back(pixel_area(world_->camera(), place(tree_of_[h.slot]->bounds(), world_->pose(h).value())));
+      max_depths.push_back(tree_of_[h.slot]->loaded_depth());
+    }
+    const std::vector<int> expected = choose_depths(lod, areas, max_depths);
+    for (size_t i = 0; i < sorted.size(); ++i)
+      if (in_pairs.count(sorted[i].slot)) {
+        ASSERT_EQ(world_->cached_depth(sorted[i]), expected[i]) << "slot " << sorted[i].slot;
+      }
+    if (lod.policy == LodPolicy::fixed) {
+      EXPECT_EQ(stats.area_computations, 0u);
+    } else if (lod.policy == LodPolicy::screen) {
+      EXPECT_LE(stats.area_computations, in_pairs.size());
+    } else {
+      EXPECT_LE(stats.area_computations, sorted.size());
+    }
+
+    // Contacts: collide() on every live pair at the chosen depths.
+    std::vector<std::tuple<uint32_t, uint32_t, int, int, uint64_t>> want, got;
+    for (size_t i = 0; i < sorted.size(); ++i)
+      for (size_t j = i + 1; j < sorted.size(); ++j) {
+        const int da = world_->depth(sorted[i]).value(), db = world_->depth(sorted[j]).value();
+        const PairTest t = collide(placed(sorted[i], da), placed(sorted[j], db));
+        if (t.hit) want.emplace_back(sorted[i].slot, sorted[j].slot, da, db, t.box_tests);
+      }
+    for (const Contact& c : contacts_) {
+      got.emplace_back(c.a.slot, c.b.slot, c.depth_a, c.depth_b, c.box_tests);
+      ASSERT_TRUE(world_->alive(c.a) && world_->alive(c.b));
+      if (world_->pose(c.a)->position.x() > 1e6) ++totals.far_contacts;
+      const Eigen::Vector3d pa = world_->pose(c.a)->position;
+      if (pa.cwiseAbs().maxCoeff() > 11 && pa.cwiseAbs().maxCoeff() < 1e6) ++totals.outside_contacts;
+      // The estimate: two overlapping leaves; moving b by normal * penetration
+      // (a hair more) separates them.
+      const ContactEstimate& e = c.estimate;
+      EXPECT_NEAR(e.normal.norm(), 1.0, 1e-12);
+      EXPECT_GE(e.penetration, 0.0);
+      const double size = e.leaf_a.half.maxCoeff() + e.leaf_b.half.maxCoeff();
+      EXPECT_GE(test::sat_overlap(e.leaf_a, e.leaf_b), -1e-6 * size);
+      OrientedBox moved = e.leaf_b;
+      moved.center += e.normal * (e.penetration + 1e-6 * size);
+      EXPECT_LE(test::sat_overlap(e.leaf_a, moved), 1e-9 * (size + moved.center.cwiseAbs().maxCoeff()));
+      EXPECT_TRUE((e.overlap.min.array() <= e.overlap.max.array()).all());
+    }
+    ASSERT_EQ(got, want) << "frame " << totals.frames;
+  }
+
+  CollisionWorld& world() { return *world_; }
+
+ private:
+  std::mt19937 rng_;
+  std::vector<ObjectTree> trees_;
+  std::unique_ptr<CollisionWorld> world_;
+  std::vector<ObjectHandle> live_;
+  std::map<uint32_t, const ObjectTree*> tree_of_;
+  std::vector<Contact> contacts_;
+};
+
+TEST(CollisionWorldOracle, RandomCallsGiveBruteForceContactsEveryFrame) {
+  Totals totals;
+  for (uint32_t seed : {1u, 2u, 3u}) {
+    Driver d(seed, 1, nullptr);
+    for (int f = 0; f < 100 * kWork; ++f) {
+      ASSERT_NO_FATAL_FAILURE(d.frame(true, totals));
+    }
+  }
+  // Not vacuous: a good share of the tested pairs hit, including objects
+  // outside the world box and at 1e7.
+  const double rate = double(totals.contacts) / double(totals.pair_tests);
+  EXPECT_GT(rate, 0.3);
+  EXPECT_LT(rate, 0.7);
+  EXPECT_GT(totals.far_contacts, 0u);
+  EXPECT_GT(totals.outside_contacts, 0u);
+  std::printf("frames %llu, pair tests %llu, contacts %llu (far %llu, outside %llu)\n",
+              (unsigned long long)totals.frames, (unsigned long long)totals.pair_tests,
+              (unsigned long long)totals.contacts, (unsigned long long)totals.far_contacts,
+              (unsigned long long)totals.outside_contacts);
+}
+
+// An executor that runs the ranges in reverse order, one item at a time:
+// results must not depend on scheduling.
+class Backwards final : public Executor {
+ public:
+  void parallel_for(size_t count, size_t, RangeTask task) override {
+    ++calls;
+    for (size_t i = count; i-- > 0;) task(i, i + 1);
+  }
+  int calls = 0;
+};
+
+TEST(CollisionWorldOracle, BitIdenticalAcrossRepeatsThreadCountsAndExecutors) {
+  auto run = [](int threads, Executor* executor) {
+    Totals t;
+    Driver d(7, threads, executor);
+    for (int f = 0; f < 50 * kWork; ++f) d.frame(false, t);
+    EXPECT_GT(t.contacts, 0u);
+    return t.hash;
+  };
+  const uint64_t reference = run(1, nullptr);
+  EXPECT_EQ(run(1, nullptr), reference);
+  for (int threads : {2, 3, 8}) EXPECT_EQ(run(threads, nullptr), reference) << threads << " threads";
+  Backwards backwards;
+  EXPECT_EQ(run(1, &backwards), reference);
+  EXPECT_GT(backwards.calls, 0);
+}
+
+TEST(CollisionWorldOracle, ThreadPoolCoversEveryItemOnce) {
+  for (int threads : {1, 2, 3, 8}) {
+    ThreadPool pool(threads);
+    EXPECT_EQ(pool.threads(), threads);
+    for (size_t count : {size_t{0}, size_t{1}, size_t{63}, size_t{64}, size_t{1000}}) {
+      std::vector<std::atomic<int>> seen(count);
+      struct Ctx {
+        std::vector<std::atomic<int>>* seen;
+      } ctx{&seen};
+      pool.parallel_for(count, 7, {[](const void* c, size_t b, size_t e) {
+                                     for (size_t i = b; i < e; ++i) (*static_cast<const Ctx*>(c)->seen)[i]++;
+                                   },
+                                   &ctx});
+      for (size_t i = 0; i < count; ++i) ASSERT_EQ(seen[i].load(), 1) << threads << " threads, item " << i;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace octbake
