@@ -35,6 +35,8 @@ bool overlaps(const Aabb& a, const Aabb& b) {
   return (a.min.array() <= b.max.array()).all() && (b.min.array() <= a.max.array()).all();
 }
 
+uint64_t pair_key(const std::pair<uint32_t, uint32_t>& p) { return (uint64_t(p.first) << 32) | p.second; }
+
 Error bad(std::string why) { return Error{ErrorCode::invalid_argument, std::move(why)}; }
 
 Status check_pose(const Pose& p) {
@@ -473,7 +475,7 @@ void CollisionWorld::run_parallel(size_t count, size_t grain, RangeTask task) {
 void CollisionWorld::test_pairs(size_t begin, size_t end) {
   for (size_t k = begin; k < end; ++k) {
     const auto [a, b] = pairs_[k];
-    results_[k].test = collide(placed(a), placed(b));
+    results_[k].test = settings_.coherence ? collide(placed(a), placed(b), results_[k].cache) : collide(placed(a), placed(b));
   }
 }
 
@@ -556,6 +558,15 @@ DetectStats CollisionWorld::detect(std::vector<Contact>& out) {
 
   // 6. Pair tests, one result slot per pair, merged in pair order.
   results_.resize(n);
+  {
+    // Last frame's proving leaf pairs, matched by a merge over sorted keys.
+    size_t j = 0;
+    for (size_t k = 0; k < n; ++k) {
+      const uint64_t key = pair_key(pairs_[k]);
+      while (j < coherence_.size() && coherence_[j].key < key) ++j;
+      results_[k].cache = (j < coherence_.size() && coherence_[j].key == key) ? coherence_[j].cache : PairCache{};
+    }
+  }
   run_parallel(n, kPairGrain,
                {[](const void* self, size_t b, size_t e) {
                   const_cast<CollisionWorld*>(static_cast<const CollisionWorld*>(self))->test_pairs(b, e);
@@ -576,6 +587,10 @@ DetectStats CollisionWorld::detect(std::vector<Contact>& out) {
     c.estimate = estimate_contact(leaf_box(pa, t.leaf.a), leaf_box(pb, t.leaf.b));
     out.push_back(c);
   }
+  coherence_next_.clear();
+  for (size_t k = 0; k < n; ++k)
+    if (results_[k].cache.tree_a) coherence_next_.push_back({pair_key(pairs_[k]), results_[k].cache});
+  coherence_.swap(coherence_next_);
   stats.contacts = out.size();
   return stats;
 }

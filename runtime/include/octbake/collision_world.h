@@ -139,6 +139,11 @@ struct CollisionSettings {
   // are bit-identical for every choice.
   int threads = 1;
   Executor* executor = nullptr;  // not owned; must outlive the world
+  // Temporal coherence: each candidate pair first tries the leaf pair that
+  // proved its contact last frame (collide() with a PairCache). Same contacts
+  // either way; only box-test counts differ (fewer on coherent motion), and
+  // they stay deterministic.
+  bool coherence = true;
 };
 
 // What an app can respond with, from the leaf pair that proved the contact.
@@ -308,14 +313,22 @@ class CollisionWorld {
   std::vector<std::pair<uint32_t, uint32_t>> pairs_;
   struct PairResult {
     PairTest test;
+    PairCache cache;  // in: the last frame's proving leaf pair; out: this frame's
   };
   std::vector<PairResult> results_;
+  // Temporal coherence: per candidate pair (slots a < b, sorted by key) the
+  // leaf pair that proved its last contact, tried first next frame. Only an
+  // occupied leaf pair that still overlaps counts, so a stale entry (a slot
+  // reused, a depth changed) costs one box test and is never a false hit.
+  struct CoherentPair {
+    uint64_t key;
+    PairCache cache;
+  };
+  std::vector<CoherentPair> coherence_, coherence_next_;
   std::vector<uint32_t> streamed_;  // scratch for the require phase
   std::vector<double> areas_scratch_;
   std::vector<int> max_scratch_, depth_scratch_;
   std::unique_ptr<ThreadPool> pool_;
-  // Temporal coherence hook: per candidate pair state keyed by the two
-  // handles (PairCache) plugs in here, next to results_.
 };
 
 // The SAT estimate between two overlapping oriented boxes (see ContactEstimate).
