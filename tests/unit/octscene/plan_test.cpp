@@ -252,7 +252,7 @@ TEST(ForScene, ReducedFilesGiveTheSameLogAsFullOnes) {
                   dir);
   ASSERT_EQ(c.status, 0) << c.err;
   const std::string full_log = read_text(dir / "full.csv");
-  EXPECT_GT(std::count(full_log.begin(), full_log.end(), '\n'), 10);
+  EXPECT_GT(std::count(full_log.begin(), full_log.end(), '\n'), 3);  // header + collisions (6 in 150 frames)
   EXPECT_EQ(read_text(dir / "reduced.csv"), full_log);
 }
 

@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <random>
-#include <regex>
 
 #include "seeded_random.h"
 #include "trade.h"
@@ -18,23 +17,39 @@ struct Rect {
 
 // Label boxes as the plot reserves them: font 10, 0.62 em per character,
 // baseline 3 above the box bottom.
+// Every "<prefix>A' ... B'...>TEXT<" occurrence: the two numbers after the
+// prefix and the text up to the next '<' (no std::regex: GCC 12 warns inside it).
+struct Hit {
+  double a, b;
+  std::string text, tag;
+};
+std::vector<Hit> find_all(const std::string& svg, const std::string& prefix, const std::string& second) {
+  std::vector<Hit> hits;
+  for (size_t at = svg.find(prefix); at != std::string::npos; at = svg.find(prefix, at + 1)) {
+    const size_t a = at + prefix.size(), b = svg.find(second, a) + second.size();
+    const size_t close = svg.find('>', b), end = svg.find('<', close);
+    hits.push_back({std::stod(svg.substr(a)), std::stod(svg.substr(b)), svg.substr(close + 1, end - close - 1),
+                    svg.substr(at, close - at)});
+  }
+  return hits;
+}
+
+// Label boxes as the plot reserves them: font 10, 0.62 em per character,
+// baseline 3 above the box bottom.
 std::vector<Rect> label_boxes(const std::string& svg) {
   std::vector<Rect> boxes;
-  const std::regex text("<text class='label' x='([-0-9.]+)' y='([-0-9.]+)' font-size='10'>([^<]*)</text>");
-  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), text); it != std::sregex_iterator(); ++it) {
-    const double x = std::stod((*it)[1]), y = std::stod((*it)[2]);
-    const double w = 0.62 * 10 * double((*it)[3].length());
-    boxes.push_back({x, y + 3 - 12, x + w, y + 3});
+  for (const Hit& h : find_all(svg, "<text class='label' x='", "y='")) {
+    const double w = 0.62 * 10 * double(h.text.size());
+    boxes.push_back({h.a, h.b + 3 - 12, h.a + w, h.b + 3});
   }
   return boxes;
 }
 
 std::vector<Rect> point_boxes(const std::string& svg) {
   std::vector<Rect> boxes;
-  const std::regex circle("<circle cx='([-0-9.]+)' cy='([-0-9.]+)' r='4'");
-  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), circle); it != std::sregex_iterator(); ++it) {
-    const double x = std::stod((*it)[1]), y = std::stod((*it)[2]);
-    boxes.push_back({x - 4, y - 4, x + 4, y + 4});
+  for (const Hit& h : find_all(svg, "<circle cx='", "cy='")) {
+    if (h.tag.find("r='4'") == std::string::npos) continue;  // not a legend swatch
+    boxes.push_back({h.a - 4, h.b - 4, h.a + 4, h.b + 4});
   }
   return boxes;
 }
