@@ -4,12 +4,14 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <thread>
 
 #include "gen.h"
 #include "run.h"
@@ -33,6 +35,9 @@ double peak_rss_mb() {
   return static_cast<double>(usage.ru_maxrss) / 1024.0;  // Linux: KiB
 }
 
+// All cores (hardware_concurrency may say 0: unknown).
+int default_threads() { return std::max(1u, std::thread::hardware_concurrency()); }
+
 struct RunArgs {
   std::string scene_path;
   std::string lod = "screen";
@@ -44,6 +49,7 @@ struct RunArgs {
   std::string log_path;
   std::string summary = "table";
   bool areas_every_frame = false;
+  int threads = default_threads();
 };
 
 // The thesis's table always shows 1-1 .. 3-3; other pairs when they occur.
@@ -108,6 +114,7 @@ int run_command(const RunArgs& args) {
                                                  : Response::separate;
   options.frames = args.frames;
   options.areas_every_frame = args.areas_every_frame;
+  options.threads = args.threads;
 
   // Only the depths the LOD can reach are decoded.
   Result<SceneModels> models = load_scene_models(*scene, *library, args.max_depth);
@@ -191,6 +198,8 @@ int cli_main(int argc, char** argv) {
       ->check(CLI::IsMember({"table", "json"}))->capture_default_str();
   run_cmd->add_flag("--areas-every-frame", run.areas_every_frame,
                     "recompute pixel areas every frame, not only when an object changes leaf set");
+  run_cmd->add_option("--threads", run.threads, "worker threads (results do not depend on it; default: all cores)")
+      ->check(CLI::Range(1, 4096));
 
   GenArgs gen;
   CLI::App* gen_cmd = app.add_subcommand("gen", "write a random scene to stdout");
@@ -207,6 +216,16 @@ int cli_main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber)->capture_default_str();
   gen_cmd->add_option("--frames", gen.options.frames, "frame count")->check(CLI::NonNegativeNumber)->capture_default_str();
   gen_cmd->add_option("--timestep", gen.options.timestep, "seconds per frame")->check(CLI::PositiveNumber);
+  std::vector<double> scale_range;
+  gen_cmd->add_option("--scale-range", scale_range, "MIN,MAX: scales log-uniform in [MIN, MAX] (default 1,1)")
+      ->delimiter(',')->expected(2)->check(CLI::PositiveNumber);
+  gen_cmd->add_option("--rotated-share", gen.options.rotated_share, "share of objects with a random 3D orientation")
+      ->check(CLI::Range(0.0, 1.0));
+  gen_cmd->add_option("--spin-share", gen.options.spin_share, "share of objects that spin")->check(CLI::Range(0.0, 1.0));
+  gen_cmd->add_option("--spin-rate", gen.options.spin_rate, "top spin rate, radians per second")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
+  gen_cmd->add_option("--camera-path", gen.options.camera_keys, "KEYS: a camera path of KEYS keys through the world")
+      ->check(CLI::Range(2, 10000));
 
   try {
     app.parse(argc, argv);
@@ -219,6 +238,7 @@ int cli_main(int argc, char** argv) {
     return 2;
   }
   if (*run_cmd) return run_command(run);
+  if (scale_range.size() == 2) gen.options.scale_min = scale_range[0], gen.options.scale_max = scale_range[1];
   return gen_command(gen);
 }
 

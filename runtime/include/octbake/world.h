@@ -8,6 +8,7 @@
 
 #include "octbake/collide.h"
 #include "octbake/lod.h"
+#include "octbake/motion.h"
 #include "octbake/object_tree.h"
 #include "octbake/pose.h"
 #include "octbake/world_tree.h"
@@ -21,6 +22,8 @@ struct ObjectDesc {
   const ObjectTree* tree = nullptr;  // must outlive the World
   Pose pose;
   Eigen::Vector3d velocity{0, 0, 0};  // world units per second; zero = static
+  // Radians per second about world axes through the position (motion.h spun()).
+  Eigen::Vector3d angular_velocity{0, 0, 0};
 };
 
 struct WorldSettings {
@@ -31,6 +34,8 @@ struct WorldSettings {
   LodSettings lod;
   Camera camera;
   bool areas_every_frame = false;  // else only when an object changes leaf set
+  std::vector<CameraKey> camera_path;  // empty: `camera` at every frame (motion.h camera_on_path())
+  int threads = 1;                     // worker threads for step(); results do not depend on it
 };
 
 struct Collision {
