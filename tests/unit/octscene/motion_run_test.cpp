@@ -219,6 +219,11 @@ TEST(MotionRun, ThreadsMustBePositive) {
     Command c = run_command(kOctscene + " run " + (dir / "spin.json").string() + " --threads " + bad, dir);
     EXPECT_EQ(c.status, 2) << bad;
     EXPECT_NE(c.err.find("--threads"), std::string::npos) << c.err;
+    c = run_command(kOctscene + " trade " + (dir / "spin.json").string() + " --meshes " + dir.string() +
+                        " --threads " + bad,
+                    dir);
+    EXPECT_EQ(c.status, 2) << bad;
+    EXPECT_NE(c.err.find("--threads"), std::string::npos) << c.err;
   }
   Result<Scene> scene = parse_scene(spinning_bar_scene(5).dump(), dir.string());
   ASSERT_TRUE(scene);
