@@ -1,5 +1,6 @@
 #include "gen.h"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <numbers>
@@ -22,6 +23,57 @@ bool overlap(const Aabb& a, const Aabb& b) {
   return (a.min.array() <= b.max.array()).all() && (b.min.array() <= a.max.array()).all();
 }
 
+// Uniform on the sphere, by rejection from the cube (3 draws per try).
+Eigen::Vector3d random_direction(std::mt19937& rng) {
+  Eigen::Vector3d dir;
+  do {
+    for (int k = 0; k < 3; ++k) dir[k] = uniform(rng, -1, 1);
+  } while (dir.squaredNorm() > 1 || dir.squaredNorm() < 1e-4);
+  return dir.normalized();
+}
+
+// Uniform over all orientations (Shoemake's subgroup algorithm).
+Eigen::Quaterniond random_rotation(std::mt19937& rng) {
+  const double u1 = uniform(rng), u2 = uniform(rng), u3 = uniform(rng);
+  const double a = std::sqrt(1 - u1), b = std::sqrt(u1), tau = 2 * std::numbers::pi;
+  return Eigen::Quaterniond(b * std::cos(tau * u3), a * std::sin(tau * u2), a * std::cos(tau * u2),
+                            b * std::sin(tau * u3))
+      .normalized();
+}
+
+// The box an object spinning about its origin stays in: the sphere through
+// its farthest bounds corner.
+Aabb spin_box(const Aabb& local, double scale) {
+  double r = 0;
+  for (int c = 0; c < 8; ++c) {
+    const Eigen::Vector3d p{(c & 1) ? local.max.x() : local.min.x(), (c & 2) ? local.max.y() : local.min.y(),
+                            (c & 4) ? local.max.z() : local.min.z()};
+    r = std::max(r, p.norm() * scale);
+  }
+  return {Eigen::Vector3d::Constant(-r), Eigen::Vector3d::Constant(r)};
+}
+
+bool share_ok(double share) { return share >= 0 && share <= 1; }
+
+// A loop around the world centre at 0.3 of its size, rising and falling by
+// 0.1, each key looking 0.6 rad ahead along the loop.
+std::vector<CameraKey> flythrough(int keys, int64_t frames, double world_size) {
+  auto at = [world_size](double angle) {
+    return Eigen::Vector3d{0.3 * world_size * std::cos(angle), 0.1 * world_size * std::sin(2 * angle),
+                           0.3 * world_size * std::sin(angle)};
+  };
+  std::vector<CameraKey> path;
+  for (int k = 0; k < keys; ++k) {
+    const double angle = 2 * std::numbers::pi * k / (keys - 1);
+    CameraKey key;
+    key.frame = frames / (keys - 1) * k + frames % (keys - 1) * k / (keys - 1);  // floor(frames k / (keys-1)), no overflow
+    key.position = at(angle);
+    key.look_at = at(angle + 0.6);
+    path.push_back(key);
+  }
+  return path;
+}
+
 }  // namespace
 
 Result<Scene> generate_scene(const GenOptions& options, ModelLibrary& library) {
@@ -32,6 +84,16 @@ Result<Scene> generate_scene(const GenOptions& options, ModelLibrary& library) {
     return Error{ErrorCode::invalid_argument, "--world: must be a positive size"};
   if (!(options.speed >= 0) || !std::isfinite(options.speed))
     return Error{ErrorCode::invalid_argument, "--speed: must be >= 0"};
+  if (!(options.scale_min > 0) || !(options.scale_max >= options.scale_min) || !std::isfinite(options.scale_max))
+    return Error{ErrorCode::invalid_argument, "--scale-range: need 0 < min <= max, both finite"};
+  if (!share_ok(options.rotated_share)) return Error{ErrorCode::invalid_argument, "--rotated-share: must be in [0, 1]"};
+  if (!share_ok(options.spin_share)) return Error{ErrorCode::invalid_argument, "--spin-share: must be in [0, 1]"};
+  if (!(options.spin_rate >= 0) || !std::isfinite(options.spin_rate))
+    return Error{ErrorCode::invalid_argument, "--spin-rate: must be >= 0"};
+  if (options.camera_keys == 1 || options.camera_keys < 0)
+    return Error{ErrorCode::invalid_argument, "--camera-path: need at least 2 keys (or 0: a fixed camera)"};
+  if (options.camera_keys >= 2 && options.frames < options.camera_keys - 1)
+    return Error{ErrorCode::invalid_argument, "--camera-path: need at least one frame per key (--frames)"};
 
   std::vector<Aabb> bounds;
   for (const std::string& m : options.models) {
@@ -50,6 +112,11 @@ Result<Scene> generate_scene(const GenOptions& options, ModelLibrary& library) {
   scene.camera.position = {0.15 * options.world_size, 0.35 * options.world_size, -1.1 * options.world_size};
   scene.camera.look_at = {0, 0, 0};
   scene.camera.far_plane = 10 * options.world_size;
+  if (options.camera_keys >= 2) {
+    scene.camera_path = flythrough(options.camera_keys, options.frames, options.world_size);
+    scene.camera.position = scene.camera_path.front().position;
+    scene.camera.look_at = scene.camera_path.front().look_at;
+  }
 
   std::mt19937 rng(options.seed);
   std::map<std::string, int> per_model;
@@ -60,12 +127,23 @@ Result<Scene> generate_scene(const GenOptions& options, ModelLibrary& library) {
     SceneObject o;
     o.model = options.models[m];
     o.name = o.model + "_" + std::to_string(per_model[o.model]++);
+    // Each option draws only when it is used (see GenOptions).
+    if (options.scale_min < options.scale_max)
+      o.pose.scale = std::exp(uniform(rng, std::log(options.scale_min), std::log(options.scale_max)));
+    else
+      o.pose.scale = options.scale_min;
+    const bool rotated = options.rotated_share > 0 && uniform(rng) < options.rotated_share;
+    const bool spinning = options.spin_share > 0 && uniform(rng) < options.spin_share;
     bool ok = false;
     for (int attempt = 0; attempt < kAttemptsPerObject && !ok; ++attempt) {
-      double yaw = uniform(rng, 0, 2 * std::numbers::pi);
-      o.pose.rotation = Eigen::Quaterniond(std::cos(yaw / 2), 0, std::sin(yaw / 2), 0);
+      if (rotated) {
+        o.pose.rotation = random_rotation(rng);
+      } else {
+        double yaw = uniform(rng, 0, 2 * std::numbers::pi);
+        o.pose.rotation = Eigen::Quaterniond(std::cos(yaw / 2), 0, std::sin(yaw / 2), 0);
+      }
       o.pose.position.setZero();
-      Aabb at_origin = world_bounds(place(bounds[m], o.pose));
+      Aabb at_origin = spinning ? spin_box(bounds[m], o.pose.scale) : world_bounds(place(bounds[m], o.pose));
       // Positions that keep the whole box inside the world.
       Eigen::Vector3d lo = scene.world.min - at_origin.min, hi = scene.world.max - at_origin.max;
       if ((lo.array() > hi.array()).any()) break;  // larger than the world
@@ -79,12 +157,14 @@ Result<Scene> generate_scene(const GenOptions& options, ModelLibrary& library) {
       return Error{ErrorCode::invalid_argument, "cannot place " + o.name + " without an overlap after " +
                                                     std::to_string(kAttemptsPerObject) +
                                                     " tries; use a larger --world or fewer objects"};
+    // Direction first, then magnitude (separate statements: operands of * are unsequenced).
     if (n >= options.static_count && options.speed > 0) {
-      Eigen::Vector3d dir;
-      do {
-        for (int k = 0; k < 3; ++k) dir[k] = uniform(rng, -1, 1);
-      } while (dir.squaredNorm() > 1 || dir.squaredNorm() < 1e-4);  // uniform direction
-      o.velocity = dir.normalized() * (options.speed * uniform(rng, 0.5, 1));
+      const Eigen::Vector3d dir = random_direction(rng);
+      o.velocity = dir * (options.speed * uniform(rng, 0.5, 1));
+    }
+    if (spinning && options.spin_rate > 0) {
+      const Eigen::Vector3d axis = random_direction(rng);
+      o.angular_velocity = axis * (options.spin_rate * uniform(rng, 0.5, 1));
     }
     scene.objects.push_back(std::move(o));
   }

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -11,6 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <thread>
 
 #include "alloc_counter.h"
 #include "budget.h"
@@ -47,6 +49,9 @@ const char* response_name(Response r) {
   return r == Response::none ? "none" : r == Response::thesis ? "thesis" : "separate";
 }
 
+// All cores (hardware_concurrency may say 0: unknown).
+int default_threads() { return std::max(1u, std::thread::hardware_concurrency()); }
+
 // Options `run` and `plan` share: how the scene is run.
 struct SceneArgs {
   std::string baked;  // overrides the scene's "baked" when set
@@ -73,6 +78,9 @@ void add_scene_options(CLI::App* cmd, SceneArgs& a) {
   cmd->add_flag("--areas-every-frame", a.options.areas_every_frame,
                 "recompute pixel areas every frame, not only when an object changes leaf set");
   cmd->add_option("--baked", a.baked, "folder or pack of trees (default: the scene's \"baked\")");
+  a.options.threads = default_threads();
+  cmd->add_option("--threads", a.options.threads, "worker threads (results do not depend on it; default: all cores)")
+      ->check(CLI::Range(1, 4096));
 }
 
 nlohmann::ordered_json options_json(const SceneArgs& a, const Scene& scene) {
@@ -85,6 +93,7 @@ nlohmann::ordered_json options_json(const SceneArgs& a, const Scene& scene) {
   j["response"] = response_name(a.options.response);
   j["frames"] = a.options.frames >= 0 ? a.options.frames : scene.frames;
   j["areas_every_frame"] = a.options.areas_every_frame;
+  j["threads"] = a.options.threads;
   return j;
 }
 
@@ -119,6 +128,7 @@ Result<Loaded> load(const std::string& scene_path, const SceneArgs& a) {
 }
 
 // ---- run ----
+
 
 struct RunArgs {
   std::string scene_path;
@@ -398,6 +408,16 @@ int cli_main(int argc, char** argv) {
   gen_cmd->add_option("--frames", gen.options.frames, "frame count")
       ->check(CLI::Range(int64_t{0}, kMaxFrames))->capture_default_str();
   gen_cmd->add_option("--timestep", gen.options.timestep, "seconds per frame")->check(CLI::PositiveNumber);
+  std::vector<double> scale_range;
+  gen_cmd->add_option("--scale-range", scale_range, "MIN,MAX: scales log-uniform in [MIN, MAX] (default 1,1)")
+      ->delimiter(',')->expected(2)->check(CLI::PositiveNumber);
+  gen_cmd->add_option("--rotated-share", gen.options.rotated_share, "share of objects with a random 3D orientation")
+      ->check(CLI::Range(0.0, 1.0));
+  gen_cmd->add_option("--spin-share", gen.options.spin_share, "share of objects that spin")->check(CLI::Range(0.0, 1.0));
+  gen_cmd->add_option("--spin-rate", gen.options.spin_rate, "top spin rate, radians per second")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
+  gen_cmd->add_option("--camera-path", gen.options.camera_keys, "KEYS: a camera path of KEYS keys through the world")
+      ->check(CLI::Range(2, 10000));
 
   // Listed in --help; main() hands them their arguments before CLI11 parses.
   for (const Tool& tool : tools()) app.add_subcommand(tool.name, tool.help)->allow_extras();
@@ -426,6 +446,7 @@ int cli_main(int argc, char** argv) {
   }
   if (*run_cmd) return run_command(run);
   if (*plan_cmd) return plan_command(plan);
+  if (scale_range.size() == 2) gen.options.scale_min = scale_range[0], gen.options.scale_max = scale_range[1];
   return gen_command(gen);
 }
 

@@ -66,6 +66,7 @@ Result<RunResult> run_scene(const Scene& scene, const SceneModels& models, const
     return Error{ErrorCode::invalid_argument, "models were loaded for another scene"};
   if (options.lod.min_depth < 0 || options.lod.max_depth < options.lod.min_depth)
     return Error{ErrorCode::invalid_argument, "need 0 <= min depth <= max depth"};
+  if (options.threads < 1) return Error{ErrorCode::invalid_argument, "threads: must be >= 1"};
 
   WorldSettings settings;
   settings.bounds = scene.world;
@@ -75,12 +76,14 @@ Result<RunResult> run_scene(const Scene& scene, const SceneModels& models, const
   settings.lod = options.lod;
   settings.camera = scene.camera;
   settings.areas_every_frame = options.areas_every_frame;
+  settings.camera_path = scene.camera_path;
+  settings.threads = options.threads;
 
   std::vector<ObjectDesc> descs;
   descs.reserve(scene.objects.size());
   for (size_t i = 0; i < scene.objects.size(); ++i) {
     const SceneObject& o = scene.objects[i];
-    descs.push_back({o.name, &models.trees[models.tree_of_object[i]], o.pose, o.velocity});
+    descs.push_back({o.name, &models.trees[models.tree_of_object[i]], o.pose, o.velocity, o.angular_velocity});
   }
 
   auto run_start = Clock::now();

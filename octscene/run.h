@@ -26,6 +26,9 @@ struct RunOptions {
   bool areas_every_frame = false;
   // Fill FrameReport::poses (costs a copy of every pose per frame).
   bool report_poses = false;
+  // Worker threads for World::step() (>= 1). Collisions, logs and counts are
+  // the same for every value; `octscene run` defaults to all cores.
+  int threads = 1;
 };
 
 // One stepped frame, handed to the callback right after World::step().

@@ -1,5 +1,6 @@
 #include "scene.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -92,6 +93,13 @@ Eigen::Vector3d vec3(const json& j, const std::string& path) {
   return {a[0], a[1], a[2]};
 }
 
+// A camera that can look: a view direction, not parallel to `up` (non-zero).
+bool has_view(const Camera& c) {
+  if (c.look_at == c.position) return false;
+  const Eigen::Vector3d forward = (c.look_at - c.position).normalized();
+  return forward.cross(c.up.normalized()).norm() >= 1e-9;
+}
+
 Camera parse_camera(const json& j, const std::string& path) {
   check_keys(j, path, {"position", "look_at", "up", "fov_y_deg", "viewport", "near", "far"});
   Camera c;
@@ -99,9 +107,7 @@ Camera parse_camera(const json& j, const std::string& path) {
   c.look_at = vec3(require(j, path, "look_at"), join(path, "look_at"));
   if (c.look_at == c.position) fail(join(path, "look_at"), "same as position");
   if (const json* v = find(j, "up")) c.up = vec3(*v, join(path, "up"));
-  Eigen::Vector3d forward = (c.look_at - c.position).normalized();
-  if (c.up.norm() == 0 || forward.cross(c.up.normalized()).norm() < 1e-9)
-    fail(join(path, "up"), "zero or parallel to the view direction");
+  if (c.up.norm() == 0 || !has_view(c)) fail(join(path, "up"), "zero or parallel to the view direction");
   if (const json* v = find(j, "fov_y_deg")) {
     c.fov_y_deg = number(*v, join(path, "fov_y_deg"));
     if (!(c.fov_y_deg > 0 && c.fov_y_deg < 180)) fail(join(path, "fov_y_deg"), "must be in (0, 180)");
@@ -126,8 +132,47 @@ Camera parse_camera(const json& j, const std::string& path) {
   return c;
 }
 
+// The keys, and a camera that can look at every frame the path gives (between
+// keys too: an interpolated view direction can pass through zero or `up`).
+std::vector<CameraKey> parse_camera_path(const json& j, const Camera& base) {
+  if (!j.is_array()) fail("camera_path", std::string("expected an array, got ") + type_name(j));
+  std::vector<CameraKey> keys;
+  for (size_t i = 0; i < j.size(); ++i) {
+    const std::string path = index("camera_path", i);
+    check_keys(j[i], path, {"frame", "position", "look_at"});
+    CameraKey k;
+    k.frame = integer(require(j[i], path, "frame"), join(path, "frame"));
+    if (k.frame < 0) fail(join(path, "frame"), "must be >= 0");
+    if (!keys.empty() && k.frame <= keys.back().frame) fail(join(path, "frame"), "frames must be strictly ascending");
+    k.position = vec3(require(j[i], path, "position"), join(path, "position"));
+    k.look_at = vec3(require(j[i], path, "look_at"), join(path, "look_at"));
+    if (k.look_at == k.position) fail(join(path, "look_at"), "same as position");
+    keys.push_back(k);
+    if (!has_view(camera_on_path(base, keys, k.frame)))
+      fail(join(path, "look_at"), "view direction parallel to camera.up");
+  }
+  for (size_t i = 1; i < keys.size(); ++i) {
+    // d(t) x up is linear in t: check the frames around its smallest norm.
+    const CameraKey &k0 = keys[i - 1], &k1 = keys[i];
+    const Eigen::Vector3d d0 = k0.look_at - k0.position, d1 = k1.look_at - k1.position;
+    const Eigen::Vector3d up = base.up.normalized();
+    const Eigen::Vector3d a = d0.cross(up), b = (d1 - d0).cross(up);
+    const double t = b.squaredNorm() > 0 ? std::clamp(-a.dot(b) / b.squaredNorm(), 0.0, 1.0) : 0.0;
+    const double span = static_cast<double>(k1.frame - k0.frame);
+    const double offset = std::floor(t * span);  // < span unless t == 1: the cast cannot overflow
+    const int64_t below = offset >= span ? k1.frame : k0.frame + static_cast<int64_t>(offset);
+    for (int64_t f : {below, std::min(below + 1, k1.frame)}) {
+      if (!has_view(camera_on_path(base, keys, f)))
+        fail(index("camera_path", i), "the camera looks along camera.up or at its own position at frame " +
+                                          std::to_string(f) + ", between keys " + std::to_string(i - 1) + " and " +
+                                          std::to_string(i));
+    }
+  }
+  return keys;
+}
+
 SceneObject parse_object(const json& j, const std::string& path) {
-  check_keys(j, path, {"name", "model", "position", "rotation", "scale", "velocity"});
+  check_keys(j, path, {"name", "model", "position", "rotation", "scale", "velocity", "angular_velocity"});
   SceneObject o;
   o.name = string(require(j, path, "name"), join(path, "name"));
   // Names go unquoted into the CSV log.
@@ -146,11 +191,15 @@ SceneObject parse_object(const json& j, const std::string& path) {
     if (!(o.pose.scale > 0)) fail(join(path, "scale"), "must be > 0");
   }
   if (const json* v = find(j, "velocity")) o.velocity = vec3(*v, join(path, "velocity"));
+  if (const json* v = find(j, "angular_velocity")) {
+    o.angular_velocity = vec3(*v, join(path, "angular_velocity"));
+    if (!std::isfinite(o.angular_velocity.norm())) fail(join(path, "angular_velocity"), "rate too large");
+  }
   return o;
 }
 
 Scene parse(const json& root, const std::string& scene_dir) {
-  check_keys(root, "", {"format", "baked", "camera", "world", "timestep", "frames", "objects"});
+  check_keys(root, "", {"format", "baked", "camera", "camera_path", "world", "timestep", "frames", "objects"});
   Scene s;
   std::string format = string(require(root, "", "format"), "format");
   if (format != kFormat) fail("format", "expected \"" + std::string(kFormat) + "\", got \"" + format + "\"");
@@ -161,6 +210,7 @@ Scene parse(const json& root, const std::string& scene_dir) {
   s.baked = (b.is_absolute() || scene_dir.empty()) ? baked : (std::filesystem::path(scene_dir) / b).string();
 
   s.camera = parse_camera(require(root, "", "camera"), "camera");
+  if (const json* v = find(root, "camera_path")) s.camera_path = parse_camera_path(*v, s.camera);
 
   const json& world = require(root, "", "world");
   check_keys(world, "world", {"min", "max", "depth"});
@@ -307,6 +357,15 @@ std::string write_scene(const Scene& scene, const std::string& baked) {
   out += "  \"format\": " + json(kFormat).dump() + ",\n";
   out += "  \"baked\": " + json(baked).dump() + ",\n";
   out += "  \"camera\": " + camera.dump() + ",\n";
+  if (!scene.camera_path.empty()) {
+    out += "  \"camera_path\": [";
+    for (size_t i = 0; i < scene.camera_path.size(); ++i) {
+      const CameraKey& k = scene.camera_path[i];
+      json key = {{"frame", k.frame}, {"position", v3(k.position)}, {"look_at", v3(k.look_at)}};
+      out += (i ? ",\n    " : "\n    ") + key.dump();
+    }
+    out += "\n  ],\n";
+  }
   out += "  \"world\": " + world.dump() + ",\n";
   out += "  \"timestep\": " + json(scene.timestep).dump() + ",\n";
   out += "  \"frames\": " + json(scene.frames).dump() + ",\n";
@@ -320,6 +379,7 @@ std::string write_scene(const Scene& scene, const std::string& baked) {
               {"rotation", {q.x(), q.y(), q.z(), q.w()}},
               {"scale", o.pose.scale},
               {"velocity", v3(o.velocity)}};
+    if (!o.angular_velocity.isZero(0)) j["angular_velocity"] = v3(o.angular_velocity);
     out += (i ? ",\n    " : "\n    ") + j.dump();
   }
   out += scene.objects.empty() ? "]\n}\n" : "\n  ]\n}\n";

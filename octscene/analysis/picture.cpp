@@ -255,7 +255,10 @@ int picture_scene(const SceneArgs& a) {
   std::snprintf(title, sizeof title, "frame %lld, LOD %s, depths %d-%d", static_cast<long long>(a.frame),
                 kPolicy[static_cast<int>(a.lod.policy)], a.lod.min_depth, std::min(a.lod.max_depth, deepest));
   const int width = a.width > 0 ? a.width : std::min(scene->camera.viewport_w, 1280);
-  return write_or_fail(render_scene(*scene, poses, depths, meshes, trees, title, width), a.out);
+  // The frame's camera: the one the LOD saw when it chose these depths.
+  Scene at_frame = *scene;
+  at_frame.camera = camera_on_path(scene->camera, scene->camera_path, a.frame);
+  return write_or_fail(render_scene(at_frame, poses, depths, meshes, trees, title, width), a.out);
 }
 
 }  // namespace

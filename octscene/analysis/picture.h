@@ -27,7 +27,8 @@ Raster render_tree_grid(const ObjectTree& tree, const Mesh* mesh, std::span<cons
 // Colour of objects tested at `depth` in scene pictures (and their legend).
 Rgb depth_color(int depth);
 
-// The scene from its camera, width x (width * viewport aspect): each object's
+// The scene from scene.camera (render_scene ignores camera_path: give it the
+// frame's camera_on_path()), width x (width * viewport aspect): each object's
 // mesh at `poses[i]` tinted by depth_color(depths[i]), with a legend. Where
 // meshes[i] is null the object's tree boxes at its depth are drawn instead.
 Raster render_scene(const Scene& scene, std::span<const Pose> poses, std::span<const int> depths,

@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <thread>
 
 #include "cli_util.h"
 #include "exact.h"
@@ -139,6 +140,7 @@ Result<TradeReport> run_trade(const Scene& scene, ModelLibrary& library, const T
     run.response = Response::none;
     run.frames = options.frames;
     run.report_poses = true;
+    run.threads = options.threads;
     bool motion_differs = false;
     auto on_frame = [&](const FrameReport& f) {
       const size_t fi = static_cast<size_t>(f.frame);
@@ -427,6 +429,9 @@ int trade_main(int argc, char** argv) {
       ->check(CLI::Range(int64_t{0}, kMaxFrames));
   app.add_option("--max-depth", options.max_depth, "deepest depth tried (default: baked depth, at most 8)")
       ->check(CLI::Range(1, 12));
+  options.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  app.add_option("--threads", options.threads, "worker threads (scores do not depend on it; default: all cores)")
+      ->check(CLI::Range(1, 4096));
   app.add_option("--plot", plot_path, "write an SVG of cost against precision");
   app.add_option("--csv", csv_path, "write one CSV row per setting");
   try {

@@ -22,6 +22,7 @@ struct TradeOptions {
   std::string meshes = "assets";  // folder of source meshes
   int64_t frames = -1;            // < 0: the scene's
   int max_depth = 0;              // 0: deepest baked depth of the scene's trees
+  int threads = 1;                // World::step() workers (>= 1); scores do not depend on it
 };
 
 // One LOD setting's score over all frames.

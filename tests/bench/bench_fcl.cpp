@@ -11,7 +11,9 @@
 //
 // Build with -DOCTBAKE_BENCH=ON, then from the source root:
 //   build/tests/bench_fcl --benchmark_repetitions=3 [--scene=PATH ...] [--meshes=DIR] [--frames=N] [--csv=FILE]
-// Default scenes: assets/scenes/test1.json and test2.json (meshes in assets/);
+// Default scenes: assets/scenes/test1.json and test2.json (the thesis's), and
+// scales.json (sizes 536x apart) and flythrough.json (all rotated, half
+// spinning, camera on a path), meshes in assets/;
 // if they are missing, a generated scene of spheres, tori and slabs.
 #include <benchmark/benchmark.h>
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
@@ -263,7 +265,8 @@ void fcl_frames(benchmark::State& state, BenchScene* b) {
   w.manager.setup();
   std::vector<uint32_t> moving;
   for (size_t i = 0; i < b->scene.objects.size(); ++i) {
-    if (b->scene.objects[i].velocity.squaredNorm() > 0) moving.push_back(static_cast<uint32_t>(i));
+    const SceneObject& o = b->scene.objects[i];  // spinning objects move too
+    if (o.velocity.squaredNorm() > 0 || o.angular_velocity.squaredNorm() > 0) moving.push_back(static_cast<uint32_t>(i));
   }
   Score score;
   bool scored = false;
@@ -460,7 +463,8 @@ int main(int argc, char** argv) {
   }
   const fs::path source = OCTBAKE_SOURCE_DIR;
   if (scene_paths.empty()) {
-    for (const char* s : {"assets/scenes/test1.json", "assets/scenes/test2.json"}) {
+    for (const char* s : {"assets/scenes/test1.json", "assets/scenes/test2.json", "assets/scenes/scales.json",
+                          "assets/scenes/flythrough.json"}) {
       if (fs::exists(source / s)) scene_paths.push_back((source / s).string());
     }
     if (meshes_dir.empty()) meshes_dir = (source / "assets").string();

@@ -1,40 +1,174 @@
-// The thesis's experiment scenes shipped in assets/scenes/ stay valid: they
-// parse, have the thesis's object counts, and name only bundled models.
+// The scenes shipped in assets/scenes/ stay valid: they parse, have the
+// thesis's object counts (or the stress properties they were made for), name
+// only bundled models, are what the commands in their README generate, and
+// log the same bytes for every thread count.
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <string>
 
+#include "helpers.h"
+#include "run.h"
 #include "scene.h"
 
 namespace octbake::scene {
 namespace {
+
+using namespace octbake::scene::testing;
+
+const fs::path kRoot = OCTBAKE_SOURCE_DIR;
+const char* const kModels[] = {"tree", "human", "frustum", "elephant", "car"};
+
+#if defined(__SANITIZE_ADDRESS__) || !defined(NDEBUG)
+constexpr int64_t kThreadFrames = 40;  // sanitizer and debug builds are slow
+#else
+constexpr int64_t kThreadFrames = 300;
+#endif
 
 struct Expected {
   const char* file;
   size_t statics, moving;
 };
 
-class BundledScene : public testing::TestWithParam<Expected> {};
+class BundledScene : public ::testing::TestWithParam<Expected> {};
 
 TEST_P(BundledScene, ParsesWithTheThesisCounts) {
-  const std::filesystem::path root = OCTBAKE_SOURCE_DIR;
   const Expected want = GetParam();
-  Result<Scene> scene = load_scene((root / "assets/scenes" / want.file).string());
+  Result<Scene> scene = load_scene((kRoot / "assets/scenes" / want.file).string());
   ASSERT_TRUE(scene.ok()) << scene.error().message;
   EXPECT_EQ(scene->frames, 7200);  // 240 s at 30 frames a second
   EXPECT_NEAR(scene->timestep, 1.0 / 30.0, 1e-9);
   size_t moving = 0;
   for (const SceneObject& o : scene->objects) {
     moving += o.velocity != Eigen::Vector3d::Zero();
-    EXPECT_TRUE(std::filesystem::exists(root / "assets" / (o.model + ".obj"))) << o.name << ": " << o.model;
+    EXPECT_TRUE(fs::exists(kRoot / "assets" / (o.model + ".obj"))) << o.name << ": " << o.model;
   }
   EXPECT_EQ(scene->objects.size() - moving, want.statics);
   EXPECT_EQ(moving, want.moving);
 }
 
 INSTANTIATE_TEST_SUITE_P(Thesis, BundledScene,
-                         testing::Values(Expected{"test1.json", 100, 50}, Expected{"test2.json", 140, 70}));
+                         ::testing::Values(Expected{"test1.json", 100, 50}, Expected{"test2.json", 140, 70}));
+
+Scene load_bundled(const char* file) {
+  Result<Scene> scene = load_scene((kRoot / "assets/scenes" / file).string());
+  EXPECT_TRUE(scene.ok()) << file << ": " << scene.error().message;
+  return scene ? *scene : Scene{};
+}
+
+TEST(BundledStress, ScalesSpanOver400x) {
+  const Scene s = load_bundled("scales.json");
+  ASSERT_FALSE(s.objects.empty());
+  double lo = 1e300, hi = 0;
+  for (const SceneObject& o : s.objects) lo = std::min(lo, o.pose.scale), hi = std::max(hi, o.pose.scale);
+  EXPECT_GE(hi / lo, 400 * 0.9) << lo << " .. " << hi;  // log-uniform over 0.05..20: the extremes come close
+  EXPECT_LE(s.frames, 900);  // `octscene trade` on it stays well under a minute
+}
+
+TEST(BundledStress, FlythroughEveryObjectRotatedAShareSpinningCameraOnAPath) {
+  const Scene s = load_bundled("flythrough.json");
+  ASSERT_FALSE(s.objects.empty());
+  size_t spinning = 0;
+  for (const SceneObject& o : s.objects) {
+    EXPECT_GT(std::abs(o.pose.rotation.x()) + std::abs(o.pose.rotation.z()), 1e-6) << o.name << " is not rotated";
+    spinning += !o.angular_velocity.isZero(0);
+  }
+  EXPECT_GT(spinning, s.objects.size() * 3 / 10);
+  EXPECT_LT(spinning, s.objects.size() * 7 / 10);
+  ASSERT_GE(s.camera_path.size(), 2u);
+  EXPECT_EQ(s.camera_path.front().frame, 0);
+  EXPECT_EQ(s.camera_path.back().frame, s.frames);
+  // The camera flies inside the world box, through the crowd.
+  for (const CameraKey& k : s.camera_path)
+    EXPECT_TRUE((k.position.array() > s.world.min.array()).all() && (k.position.array() < s.world.max.array()).all());
+  EXPECT_LE(s.frames, 900);
+}
+
+// The five bundled models baked once into a scratch folder (depth 4 keeps it
+// quick; generation reads only their bounds).
+const fs::path& baked_assets() {
+  static const fs::path dir = [] {
+    const fs::path d = scratch_with_trees() / "assets_baked";
+    std::string command = std::string(OCTBAKE_BIN) + " -q -d 4 -o " + d.string();
+    for (const char* m : kModels) command += " " + (kRoot / "assets" / (std::string(m) + ".obj")).string();
+    Command c = run_command(command, scratch_with_trees());
+    EXPECT_EQ(c.status, 0) << c.err;
+    return d;
+  }();
+  return dir;
+}
+
+// Every `octscene gen ARGS > assets/scenes/X.json` in the README, joined over
+// its line continuations (no <regex>: GCC 12 warns inside it at -O1).
+std::vector<std::pair<std::string, std::string>> readme_commands() {
+  const std::string raw = read_text(kRoot / "assets/scenes/README.md");
+  std::string text;
+  for (size_t i = 0; i < raw.size(); ++i) {
+    if (raw[i] == '\\' && i + 1 < raw.size() && raw[i + 1] == '\n') {
+      size_t next = i + 2;  // skip the break and the next line's indent
+      while (next < raw.size() && raw[next] == ' ') ++next;
+      i = next - 1;
+      continue;
+    }
+    text += raw[i];
+  }
+  std::vector<std::pair<std::string, std::string>> out;
+  const std::string start = "octscene gen ", target = "> assets/scenes/";
+  for (size_t at = text.find(start); at != std::string::npos; at = text.find(start, at + 1)) {
+    const size_t end = text.find('\n', at), to = text.find(target, at);
+    if (to == std::string::npos || to > end) continue;
+    const size_t name = to + target.size();
+    out.emplace_back(text.substr(at + start.size(), to - at - start.size()), text.substr(name, end - name));
+  }
+  return out;
+}
+
+TEST(BundledScenes, ReadmeCommandsGenerateTheShippedBytes) {
+  const auto commands = readme_commands();
+  ASSERT_GE(commands.size(), 4u);
+  for (const auto& [args, file] : commands) {
+    std::string a = args;
+    const std::string from = "--baked baked ";
+    ASSERT_NE(a.find(from), std::string::npos) << file << ": " << a;
+    a.replace(a.find(from), from.size(), "--baked " + baked_assets().string() + " ");
+    Command g = run_command(std::string(OCTSCENE_BIN) + " gen " + a, scratch_with_trees());
+    ASSERT_EQ(g.status, 0) << file << ": " << g.err;
+    EXPECT_TRUE(g.out == read_text(kRoot / "assets/scenes" / file)) << file << " is not what its README command writes";
+  }
+}
+
+// Collisions, logs and counts are the same for every thread count.
+TEST(BundledScenes, LogsAreByteIdenticalForEveryThreadCount) {
+  Result<ModelLibrary> library = ModelLibrary::open(baked_assets().string());
+  ASSERT_TRUE(library) << library.error().message;
+  for (const char* file : {"test1.json", "test2.json", "scales.json", "flythrough.json"}) {
+    Scene scene = load_bundled(file);
+    Result<SceneModels> models = load_scene_models(scene, *library, 12);
+    ASSERT_TRUE(models) << models.error().message;
+    std::string first_log;
+    RunResult first;
+    for (int threads : {1, 2, 3, 8}) {
+      RunOptions options;  // the defaults of `octscene run`: screen LOD, separate
+      options.frames = kThreadFrames;
+      options.threads = threads;
+      std::string log;
+      Result<RunResult> r = run_scene(scene, *models, options, [&](const FrameReport& f) {
+        append_log_lines(scene, f, log);
+      });
+      ASSERT_TRUE(r) << r.error().message;
+      if (threads == 1) {
+        first_log = log, first = *r;
+        continue;
+      }
+      EXPECT_TRUE(log == first_log) << file << ": --threads " << threads << " logs other collisions";
+      EXPECT_EQ(r->collisions, first.collisions) << file << ", threads " << threads;
+      EXPECT_EQ(r->pair_tests, first.pair_tests) << file << ", threads " << threads;
+      EXPECT_EQ(r->box_tests, first.box_tests) << file << ", threads " << threads;
+      EXPECT_EQ(r->depth_pairs, first.depth_pairs) << file << ", threads " << threads;
+    }
+    EXPECT_GT(first.pair_tests, 0u) << file;
+  }
+}
 
 }  // namespace
 }  // namespace octbake::scene

@@ -80,5 +80,127 @@ TEST(Gen, ImpossiblePlacementIsAnError) {
   EXPECT_NE(g.err.find("cat"), std::string::npos) << g.err;
 }
 
+// ---- sizes, orientations, spin and the camera path ----
+
+Result<Scene> gen_scene(const fs::path& dir, const std::string& extra, int statics = 40, int moving = 40,
+                        double world = 60) {
+  Command g = run_command(gen_command(dir, statics, moving, /*seed=*/9, world) + " --frames 300 " + extra, dir);
+  if (g.status != 0) return Error{ErrorCode::invalid_argument, g.err};
+  return parse_scene(g.out, dir.string());
+}
+
+TEST(GenMotion, DefaultsDrawNothingNew) {
+  // The motion options at their defaults give the very bytes of a scene
+  // generated without them (the bundled scenes stay reproducible).
+  const fs::path& dir = scratch_with_trees();
+  Command a = run_command(gen_command(dir, 30, 20, 5, 40), dir);
+  Command b = run_command(gen_command(dir, 30, 20, 5, 40) +
+                              " --scale-range 1,1 --rotated-share 0 --spin-share 0 --spin-rate 3",
+                          dir);
+  ASSERT_EQ(a.status, 0) << a.err;
+  ASSERT_EQ(b.status, 0) << b.err;
+  EXPECT_EQ(a.out, b.out);
+  EXPECT_EQ(a.out.find("angular_velocity"), std::string::npos);
+  EXPECT_EQ(a.out.find("camera_path"), std::string::npos);
+}
+
+TEST(GenMotion, ScaleRangeIsLogUniformAndPlacedWithoutOverlaps) {
+  const fs::path& dir = scratch_with_trees();
+  Result<ModelLibrary> library = ModelLibrary::open((dir / "baked").string());
+  ASSERT_TRUE(library);
+  Result<Scene> s = gen_scene(dir, "--scale-range 0.05,20", 60, 20, 400);
+  ASSERT_TRUE(s) << s.error().message;
+  double lo = 1e300, hi = 0;
+  int below_one = 0;
+  std::vector<Aabb> boxes;
+  for (const SceneObject& o : s->objects) {
+    EXPECT_GE(o.pose.scale, 0.05);
+    EXPECT_LE(o.pose.scale, 20);
+    lo = std::min(lo, o.pose.scale), hi = std::max(hi, o.pose.scale);
+    below_one += o.pose.scale < 1;  // log-uniform: half of them
+    Aabb box = world_bounds(place(library->info(o.model)->bounds, o.pose));
+    for (const Aabb& b : boxes) EXPECT_FALSE(overlap(box, b)) << o.name;
+    boxes.push_back(box);
+  }
+  EXPECT_GT(hi / lo, 100);
+  EXPECT_GT(below_one, 0.3 * 80);
+  EXPECT_LT(below_one, 0.7 * 80);
+}
+
+TEST(GenMotion, RotatedAndSpinningShares) {
+  const fs::path& dir = scratch_with_trees();
+  Result<ModelLibrary> library = ModelLibrary::open((dir / "baked").string());
+  ASSERT_TRUE(library);
+  Result<Scene> s = gen_scene(dir, "--rotated-share 1 --spin-share 0.5 --spin-rate 2", 40, 40, 80);
+  ASSERT_TRUE(s) << s.error().message;
+  int spinning = 0, spinning_statics = 0;
+  std::vector<Aabb> boxes;
+  for (size_t i = 0; i < s->objects.size(); ++i) {
+    const SceneObject& o = s->objects[i];
+    // A full 3D orientation: not a turn about y alone.
+    EXPECT_GT(std::abs(o.pose.rotation.x()) + std::abs(o.pose.rotation.z()), 1e-6) << o.name;
+    const double rate = o.angular_velocity.norm();
+    if (rate > 0) {
+      ++spinning;
+      spinning_statics += i < 40;
+      EXPECT_GE(rate, 1.0);
+      EXPECT_LT(rate, 2.0);
+    }
+    // Spinning or not, no two objects can touch at any orientation of the
+    // spinners: each one's box is that of the sphere it spins in.
+    const Aabb local = library->info(o.model)->bounds;
+    double r = 0;
+    for (int c = 0; c < 8; ++c)
+      r = std::max(r, Eigen::Vector3d((c & 1) ? local.max.x() : local.min.x(), (c & 2) ? local.max.y() : local.min.y(),
+                                      (c & 4) ? local.max.z() : local.min.z()).norm());
+    Aabb box = rate > 0 ? Aabb{o.pose.position.array() - r, o.pose.position.array() + r}
+                        : world_bounds(place(local, o.pose));
+    for (const Aabb& b : boxes) EXPECT_FALSE(overlap(box, b)) << o.name;
+    boxes.push_back(box);
+  }
+  EXPECT_GT(spinning, 0.3 * 80);
+  EXPECT_LT(spinning, 0.7 * 80);
+  EXPECT_GT(spinning_statics, 0);  // statics spin too (and so are moving)
+  Result<Scene> yaw = gen_scene(dir, "--rotated-share 0 --spin-share 0");
+  ASSERT_TRUE(yaw);
+  for (const SceneObject& o : yaw->objects) {
+    EXPECT_EQ(o.pose.rotation.x(), 0) << o.name;
+    EXPECT_EQ(o.pose.rotation.z(), 0) << o.name;
+    EXPECT_TRUE(o.angular_velocity.isZero(0));
+  }
+}
+
+TEST(GenMotion, CameraPathFliesThroughTheWorld) {
+  const fs::path& dir = scratch_with_trees();
+  Result<Scene> s = gen_scene(dir, "--camera-path 7", 20, 20, 80);
+  ASSERT_TRUE(s) << s.error().message;
+  ASSERT_EQ(s->camera_path.size(), 7u);
+  EXPECT_EQ(s->camera_path.front().frame, 0);
+  EXPECT_EQ(s->camera_path.back().frame, 300);
+  EXPECT_EQ(s->camera.position, s->camera_path.front().position);
+  for (const CameraKey& k : s->camera_path) {
+    EXPECT_TRUE((k.position.array().abs() < 40).all()) << "key at frame " << k.frame << " is outside the world";
+    EXPECT_GT(k.position.norm(), 10) << "the loop goes around the centre";
+  }
+}
+
+TEST(GenMotion, BadOptionsAreErrors) {
+  const fs::path& dir = scratch_with_trees();
+  for (const auto& [extra, expected] : std::vector<std::pair<std::string, std::string>>{
+           {"--scale-range 2,1", "--scale-range"},
+           {"--scale-range 0,1", "--scale-range"},
+           {"--scale-range 1", "--scale-range"},
+           {"--rotated-share 1.5", "--rotated-share"},
+           {"--spin-share -0.1", "--spin-share"},
+           {"--spin-rate -1", "--spin-rate"},
+           {"--camera-path 1", "--camera-path"},
+           {"--camera-path 400", "--camera-path"},  // more keys than frames
+       }) {
+    Command g = run_command(gen_command(dir, 5, 5, 1, 40) + " --frames 300 " + extra, dir);
+    EXPECT_NE(g.status, 0) << extra;
+    EXPECT_NE(g.err.find(expected), std::string::npos) << extra << ": " << g.err;
+  }
+}
+
 }  // namespace
 }  // namespace octbake::scene

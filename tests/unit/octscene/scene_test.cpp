@@ -256,5 +256,141 @@ TEST(Scene, WriteParseRoundTripIsExact) {
   }
 }
 
+// ---- motion keys: "angular_velocity" and "camera_path" ----
+
+json moving_camera_scene() {
+  json j = good_scene();
+  j["objects"][1]["angular_velocity"] = {0, 1.5, -0.25};
+  j["camera_path"] = json::parse(R"([
+    {"frame": 0, "position": [0, 10, -60], "look_at": [0, 0, 0]},
+    {"frame": 100, "position": [30, 5, -20], "look_at": [0, 0, 10]},
+    {"frame": 7200, "position": [-5, 2, 40], "look_at": [0, 0, 0]}])");
+  return j;
+}
+
+TEST(SceneMotion, KeysParse) {
+  Result<Scene> s = parse_scene(moving_camera_scene().dump(), "");
+  ASSERT_TRUE(s) << s.error().message;
+  EXPECT_TRUE(s->objects[0].angular_velocity.isZero(0));  // default
+  EXPECT_EQ(s->objects[1].angular_velocity, Eigen::Vector3d(0, 1.5, -0.25));
+  ASSERT_EQ(s->camera_path.size(), 3u);
+  EXPECT_EQ(s->camera_path[1].frame, 100);
+  EXPECT_EQ(s->camera_path[1].position, Eigen::Vector3d(30, 5, -20));
+  EXPECT_EQ(s->camera_path[1].look_at, Eigen::Vector3d(0, 0, 10));
+  EXPECT_EQ(s->camera_path[2].frame, 7200);
+  // The base camera keeps its own position; the path only replaces it per frame.
+  EXPECT_EQ(s->camera.position, Eigen::Vector3d(0, 10, -60));
+  const Camera mid = camera_on_path(s->camera, s->camera_path, 50);
+  EXPECT_EQ(mid.position, Eigen::Vector3d(15, 7.5, -40));
+  EXPECT_EQ(mid.fov_y_deg, 60);
+  Result<Scene> plain = parse_scene(good_scene().dump(), "");
+  ASSERT_TRUE(plain);
+  EXPECT_TRUE(plain->camera_path.empty());
+}
+
+TEST(SceneMotion, BadKeysNameTheirPath) {
+  struct Case {
+    std::function<void(json&)> edit;
+    const char* message;
+  };
+  for (const Case& c : std::vector<Case>{
+           {[](json& j) { j["objects"][1]["angular_velocity"] = {1, 2}; },
+            "objects[1].angular_velocity: expected an array of 3 numbers"},
+           {[](json& j) { j["objects"][1]["angular_velocity"] = 3; },
+            "objects[1].angular_velocity: expected an array of 3 numbers"},
+           {[](json& j) { j["objects"][0]["angular_velocity"] = {1, "fast", 0}; },
+            "objects[0].angular_velocity[1]: expected a number, got string"},
+           {[](json& j) { j["objects"][0]["angular_velocity"] = {1e308, 1e308, 0}; },
+            "objects[0].angular_velocity: rate too large"},
+           {[](json& j) { j["camera_path"] = json::object(); }, "camera_path: expected an array, got object"},
+           {[](json& j) { j["camera_path"][1] = 4; }, "camera_path[1]: expected an object, got number"},
+           {[](json& j) { j["camera_path"][2]["frame"] = 100; },
+            "camera_path[2].frame: frames must be strictly ascending"},
+           {[](json& j) { j["camera_path"][2]["frame"] = 50; },
+            "camera_path[2].frame: frames must be strictly ascending"},
+           {[](json& j) { j["camera_path"][0]["frame"] = -1; }, "camera_path[0].frame: must be >= 0"},
+           {[](json& j) { j["camera_path"][0]["frame"] = 0.5; },
+            "camera_path[0].frame: expected an integer, got number"},
+           {[](json& j) { j["camera_path"][1]["up"] = {0, 1, 0}; }, "camera_path[1].up: unknown key"},
+           {[](json& j) { j["camera_path"][1].erase("look_at"); }, "camera_path[1].look_at: missing required key"},
+           {[](json& j) { j["camera_path"][0].erase("frame"); }, "camera_path[0].frame: missing required key"},
+           {[](json& j) { j["camera_path"][1]["position"] = {1, 2, 3, 4}; },
+            "camera_path[1].position: expected an array of 3 numbers"},
+           {[](json& j) { j["camera_path"][1]["look_at"] = {30, 5, -20}; }, "camera_path[1].look_at: same as position"},
+           {[](json& j) { j["camera_path"][1]["look_at"] = {30, 50, -20}; },
+            "camera_path[1].look_at: view direction parallel to camera.up"},
+           // Keys 0 and 1 look +z and -z: half way the view direction is zero.
+           {[](json& j) {
+              j["camera_path"][0] = {{"frame", 0}, {"position", {0, 0, 0}}, {"look_at", {0, 0, 1}}};
+              j["camera_path"][1] = {{"frame", 100}, {"position", {0, 0, 2}}, {"look_at", {0, 0, 1}}};
+            },
+            "camera_path[1]: the camera looks along camera.up or at its own position at frame 50, between keys 0 "
+            "and 1"},
+           // Keys looking +x and -x from points 0.5 apart in y: at frame 50 it looks straight up.
+           {[](json& j) {
+              j["camera_path"][0] = {{"frame", 0}, {"position", {0, 0, 0}}, {"look_at", {1, 0, 0}}};
+              j["camera_path"][1] = {{"frame", 100}, {"position", {0, 1, 0}}, {"look_at", {-1, 2, 0}}};
+            },
+            "camera_path[1]: the camera looks along camera.up or at its own position at frame 50, between keys 0 "
+            "and 1"},
+       }) {
+    json j = moving_camera_scene();
+    c.edit(j);
+    EXPECT_EQ(error_of(j), c.message);
+  }
+  // Non-finite numbers inside the new keys, as in the old ones.
+  for (const char* where : {"angular_velocity", "camera_path"}) {
+    json j = moving_camera_scene();
+    if (std::string(where) == "camera_path") j["camera_path"][1]["look_at"][2] = 12345.25;
+    else j["objects"][1]["angular_velocity"][0] = 12345.25;
+    std::string text = j.dump();
+    text.replace(text.find("12345.25"), 8, "1e999");
+    EXPECT_EQ(error_of(text), std::string(where) == "camera_path" ? "camera_path[1].look_at[2]: not a finite number"
+                                                                   : "objects[1].angular_velocity[0]: not a finite number");
+  }
+  // An interpolated view direction that only comes near up (not onto it) is fine.
+  json j = moving_camera_scene();
+  j["camera_path"][0] = {{"frame", 0}, {"position", {0, 0, 0}}, {"look_at", {1, 0, 0}}};
+  j["camera_path"][1] = {{"frame", 100}, {"position", {0, 1, 0}}, {"look_at", {-1, 2, 0.1}}};
+  EXPECT_EQ(error_of(j), "");
+}
+
+TEST(SceneMotion, WrittenOnlyWhenPresentAndReadBackExactly) {
+  Result<Scene> plain = parse_scene(good_scene().dump(), "");
+  ASSERT_TRUE(plain);
+  const std::string text = write_scene(*plain, "b");
+  EXPECT_EQ(text.find("angular_velocity"), std::string::npos);
+  EXPECT_EQ(text.find("camera_path"), std::string::npos);
+
+  std::mt19937 rng(77);
+  auto real = [&](double lo, double hi) { return lo + (hi - lo) * (rng() * 0x1p-32); };
+  for (int round = 0; round < 30; ++round) {
+    Scene s = *plain;
+    for (SceneObject& o : s.objects)
+      if (rng() % 2) o.angular_velocity = {real(-10, 10), real(-1e-7, 1e-7), real(-3, 3)};
+    int64_t frame = rng() % 5;
+    for (int k = 0, n = static_cast<int>(rng() % 5); k < n; ++k) {
+      CameraKey key;
+      key.frame = frame;
+      frame += 1 + rng() % 1000;
+      key.position = {real(-50, 50), real(-50, 50), real(-50, -40)};
+      key.look_at = {real(-1, 1), real(-1, 1), real(0, 1)};
+      s.camera_path.push_back(key);
+    }
+    Result<Scene> back = parse_scene(write_scene(s, "b"), "");
+    ASSERT_TRUE(back) << back.error().message;
+    ASSERT_EQ(back->objects.size(), s.objects.size());
+    for (size_t i = 0; i < s.objects.size(); ++i)
+      EXPECT_EQ(back->objects[i].angular_velocity, s.objects[i].angular_velocity);
+    ASSERT_EQ(back->camera_path.size(), s.camera_path.size());
+    for (size_t k = 0; k < s.camera_path.size(); ++k) {
+      EXPECT_EQ(back->camera_path[k].frame, s.camera_path[k].frame);
+      EXPECT_EQ(back->camera_path[k].position, s.camera_path[k].position);
+      EXPECT_EQ(back->camera_path[k].look_at, s.camera_path[k].look_at);
+    }
+    EXPECT_EQ(write_scene(*back, "b"), write_scene(s, "b"));
+  }
+}
+
 }  // namespace
 }  // namespace octbake::scene
