@@ -20,6 +20,7 @@
 
 #include "octbake/object_tree.h"
 #include "octbake/pose.h"
+#include "octbake/export.h"
 
 namespace octbake {
 
@@ -42,12 +43,12 @@ struct PairTest {
 };
 
 // Box c of `p`'s tree at depth p.depth, placed in the world.
-OrientedBox leaf_box(const PlacedTree& p, const BoxCoord& c);
+OCTBAKE_API OrientedBox leaf_box(const PlacedTree& p, const BoxCoord& c);
 
 // Does any leaf of a (at a.depth) overlap any leaf of b (at b.depth)?
-PairTest collide(const PlacedTree& a, const PlacedTree& b);
+OCTBAKE_API PairTest collide(const PlacedTree& a, const PlacedTree& b);
 
 // Every overlapping leaf pair (no early out), for response and debugging.
-PairTest collide_all(const PlacedTree& a, const PlacedTree& b, std::vector<LeafPair>& out);
+OCTBAKE_API PairTest collide_all(const PlacedTree& a, const PlacedTree& b, std::vector<LeafPair>& out);
 
 }  // namespace octbake

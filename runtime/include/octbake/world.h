@@ -11,6 +11,7 @@
 #include "octbake/object_tree.h"
 #include "octbake/pose.h"
 #include "octbake/world_tree.h"
+#include "octbake/export.h"
 
 namespace octbake {
 
@@ -68,7 +69,7 @@ struct FrameStats {
 //     timesteps. A component that would take the position (the mesh origin)
 //     out of the world box while moving outward is reversed and the position
 //     mirrored back inside about that face.
-class World {
+class OCTBAKE_API World {
  public:
   // Every object's tree must be non-null and outlive the World.
   World(WorldSettings settings, std::vector<ObjectDesc> objects);
