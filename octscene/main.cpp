@@ -1,4 +1,4 @@
-// octscene: runs scenes of baked ObjectTrees (INTERFACE.md section 5).
+// octscene: runs scenes of baked ObjectTrees (docs/interface.md section 5).
 // Exit status: 0 ok, 1 bad scene or load failure, 2 bad usage.
 #include <sys/resource.h>
 #include <unistd.h>

@@ -1,4 +1,4 @@
-// Pixel area (INTERFACE.md section 7) and the depth policies built on it.
+// Pixel area (docs/interface.md section 7) and the depth policies built on it.
 #pragma once
 #include <Eigen/Core>
 #include <span>

@@ -1,5 +1,5 @@
 // The ObjectTree's occupancy, shared by the baker (which builds it) and the
-// runtime (which decodes it). INTERFACE.md section 1; encoding in schema/.
+// runtime (which decodes it). docs/interface.md section 1; encoding in schema/.
 #pragma once
 #include <Eigen/Core>
 #include <array>

@@ -48,7 +48,7 @@ struct FrameStats {
   uint64_t area_refreshes = 0;  // objects whose pixel area was recomputed
 };
 
-// Frame loop (INTERFACE.md sections 4 and 5). Per step, for frame f:
+// Frame loop (docs/interface.md sections 4 and 5). Per step, for frame f:
 //  1. LOD: recompute the pixel area of every object whose leaf set changed
 //     since its last refresh (all on the first frame, or every frame with
 //     areas_every_frame), then depths by choose_depths, each object's max depth
