@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Set up, build with warnings as errors, and run every test: once optimised,
-# once under AddressSanitizer + UndefinedBehaviorSanitizer.
+# once under AddressSanitizer + UndefinedBehaviorSanitizer; then a small
+# shared-library pass.
 set -euo pipefail
 cd "$(dirname "$0")"
 ./scripts/setup.sh
@@ -13,3 +14,11 @@ cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-g -O
 cmake --build build-asan -j"$jobs"
 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
   ctest --test-dir build-asan --output-on-failure -j"$jobs"
+# Shared libraries (BUILD_SHARED_LIBS=ON) without the analysis tools (so FCL,
+# octomap and stb are proven optional): builds only the runtime, the baker and
+# the public-API test, and runs it and the install consumer (which also checks
+# the exported symbols).
+cmake -S . -B build-shared -DCMAKE_BUILD_TYPE=Release -DOCTBAKE_WERROR=ON -DOCTBAKE_BUILD_TESTS=ON \
+  -DBUILD_SHARED_LIBS=ON -DOCTBAKE_ANALYSIS=OFF >/dev/null
+cmake --build build-shared -j"$jobs" --target test_api
+ctest --test-dir build-shared --output-on-failure -j"$jobs" -R '^(BakerApi[.]|install_consumer$)'

@@ -143,6 +143,12 @@ Result<uint64_t> bake_file(const std::string& mesh_path, const std::string& out_
   return written;
 }
 
+Result<std::string> source_hash(const std::string& path) {
+  auto hash = hash_file(path);
+  if (!hash) return with_label(hash.error(), path);
+  return hash;
+}
+
 const char* baker_version() { return OCTBAKE_VERSION; }
 
 }  // namespace octbake

@@ -91,6 +91,11 @@ OCTBAKE_BAKER_API Result<uint64_t> bake_file(const std::string& mesh_path, const
                                              const BakeOptions& options,
                                              std::vector<std::string>* files_read = nullptr);
 
+// The source hash octbake records for a mesh file: hex XXH3-128 of its bytes
+// (32 lowercase digits, canonical big endian). Only this file is hashed, not
+// the files it refers to. Errors: not_found, io_error (message names the path).
+OCTBAKE_BAKER_API Result<std::string> source_hash(const std::string& path);
+
 // The version recorded as "baker version" in every file this library writes
 // (the project version, octbake/version.h kLibraryVersion).
 OCTBAKE_BAKER_API const char* baker_version();
