@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Set up, build with warnings as errors, and run every test: once optimised,
-# once under AddressSanitizer + UndefinedBehaviorSanitizer, and the thread-safety
-# test once under ThreadSanitizer.
+# once under AddressSanitizer + UndefinedBehaviorSanitizer, the thread-safety
+# test once under ThreadSanitizer; then a small shared-library pass.
 set -euo pipefail
 cd "$(dirname "$0")"
 ./scripts/setup.sh
@@ -22,3 +22,11 @@ cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="" \
   -DOCTBAKE_WERROR=ON -DOCTBAKE_BUILD_TESTS=ON >/dev/null
 cmake --build build-tsan -j"$jobs" --target test_tsan
 TSAN_OPTIONS=halt_on_error=1 ctest --test-dir build-tsan --output-on-failure -L tsan
+# Shared libraries (BUILD_SHARED_LIBS=ON) without the analysis tools (so FCL,
+# octomap and stb are proven optional): builds only the runtime, the baker and
+# the public-API test, and runs it and the install consumer (which also checks
+# the exported symbols).
+cmake -S . -B build-shared -DCMAKE_BUILD_TYPE=Release -DOCTBAKE_WERROR=ON -DOCTBAKE_BUILD_TESTS=ON \
+  -DBUILD_SHARED_LIBS=ON -DOCTBAKE_ANALYSIS=OFF >/dev/null
+cmake --build build-shared -j"$jobs" --target test_api
+ctest --test-dir build-shared --output-on-failure -j"$jobs" -R '^(BakerApi[.]|install_consumer$)'

@@ -12,10 +12,9 @@
 #include <thread>
 #include <utility>
 
-#include "build_tree.h"
 #include "cli.h"
-#include "import.h"
 #include "octbake/baked_file.h"
+#include "octbake/baker.h"
 #include "write.h"
 
 namespace octbake {
@@ -154,7 +153,7 @@ std::optional<std::vector<OctreeMasks>> load_if_current(const std::string& path,
                                                         const std::vector<const Input*>& expect,
                                                         const BakeOptions& options) {
   auto file = BakedFile::open(path);
-  if (!file || file->format_version() != kFormatVersion || file->baker_version() != OCTBAKE_VERSION ||
+  if (!file || file->format_version() != kFormatVersion || file->baker_version() != baker_version() ||
       file->trees().size() != expect.size())
     return std::nullopt;
   std::vector<OctreeMasks> masks;
@@ -170,18 +169,39 @@ std::optional<std::vector<OctreeMasks>> load_if_current(const std::string& path,
   return masks;
 }
 
-// Imports and builds one input's tree; the error is the reason only.
-Result<TreeToEncode> bake_tree(const Input& in, const BakeOptions& options) {
-  auto mesh = import_mesh(in.path);
+// Imports and builds one input's tree through the public API (baker.h);
+// the error is the reason only. `files_read` as load_mesh.
+Result<TreeToEncode> bake_tree(const Input& in, const BakeOptions& options,
+                               std::vector<std::string>* files_read = nullptr) {
+  auto mesh = load_mesh(in.path, files_read);
   if (!mesh) return Error{mesh.error().code, error_reason(mesh.error(), in.path)};
+  auto masks = bake_masks(*mesh, options);
+  if (!masks) return masks.error();
   TreeToEncode t;
   t.name = in.name;
   t.source_hash = in.hash;
   t.options = options;
   t.triangle_count = mesh->triangles.size();
   t.vertex_count = mesh->positions.size();
-  t.masks = build_tree(*mesh, options.depth, options.occupancy);
+  t.masks = std::move(*masks);
   return t;
+}
+
+// A Make-syntax rule "OUTPUT: INPUT...": spaces, '#' and '\' escaped with
+// a backslash, '$' doubled; both Make and Ninja read it.
+std::string depfile_text(const std::string& output, const std::vector<std::string>& inputs) {
+  auto escape = [](const std::string& path) {
+    std::string e;
+    for (char ch : path) {
+      if (ch == ' ' || ch == '#') e += '\\';
+      if (ch == '$') e += '$';
+      e += ch;
+    }
+    return e;
+  };
+  std::string text = escape(output) + ":";
+  for (const std::string& in : inputs) text += " \\\n " + escape(in);
+  return text + "\n";
 }
 
 std::optional<std::string> make_dir(const std::string& dir) {
@@ -305,11 +325,20 @@ class Baker {
         return reporter_->finish(i, Outcome::up_to_date);
       }
     }
-    auto tree = bake_tree(in, config_.options);
+    std::vector<std::string> files_read;
+    auto tree = bake_tree(in, config_.options, &files_read);
     if (!tree) return fail(i, tree.error().message);
-    const std::vector<uint8_t> bytes = encode_file({&*tree, 1}, OCTBAKE_VERSION);
+    const std::vector<uint8_t> bytes = encode_file({&*tree, 1}, baker_version());
     auto written = write_file_atomic(in.output, bytes);
     if (!written) return fail(i, "cannot write " + in.output + ": " + written.error().message);
+    if (!config_.depfile.empty()) {
+      std::error_code ec;
+      fs::create_directories(fs::absolute(config_.depfile, ec).parent_path(), ec);
+      const std::string output = fs::absolute(in.output, ec).lexically_normal().string();
+      const std::string text = depfile_text(ec ? in.output : output, files_read);
+      auto dep = write_file_atomic(config_.depfile, {reinterpret_cast<const uint8_t*>(text.data()), text.size()});
+      if (!dep) return fail(i, "cannot write depfile " + config_.depfile + ": " + dep.error().message);
+    }
     const std::string problem = export_tree(tree->masks, in.name);
     if (!problem.empty()) return fail(i, problem);
     reporter_->finish(i, Outcome::baked, {}, tree->triangle_count);
@@ -355,7 +384,7 @@ class Baker {
     for (Input& in : inputs_)
       if (in.tree) trees.push_back(std::move(*in.tree));
     if (trees.empty()) return;  // keep the old pack: nothing to put in it
-    const std::vector<uint8_t> bytes = encode_file(trees, OCTBAKE_VERSION);
+    const std::vector<uint8_t> bytes = encode_file(trees, baker_version());
     auto written = write_file_atomic(config_.pack, bytes);
     if (!written) reporter_->extra_error(error_line(config_.pack, "cannot write: " + written.error().message));
   }

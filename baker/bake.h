@@ -1,4 +1,4 @@
-// The baker's job logic behind `octbake FILE...` (INTERFACE.md section 2):
+// The baker's job logic behind `octbake FILE...` (docs/interface.md, "octbake"):
 // per-input bake on a small thread pool, up-to-date check, pack mode, OBJ
 // export, progress. main.cpp only parses the command line.
 #pragma once
@@ -21,6 +21,7 @@ struct BakeConfig {
   bool force = false;              // rebake even when up to date
   std::string export_obj_dir;      // non-empty: also DIR/<stem>_d<depth>.obj
   bool progress = false;           // updating line and summary on the error stream
+  std::string depfile;             // non-empty (one input, no pack): write "OUTPUT: FILES READ" here
 };
 
 struct BakeSummary {

@@ -11,7 +11,7 @@ namespace octbake {
 // zero thickness: its boxes stay flat). depth in 1..12 (asserted); the mesh
 // must have at least one position.
 //
-// Modes (INTERFACE.md section 2):
+// Modes (docs/interface.md section 2):
 //  - surface: a box is occupied when a triangle overlaps the closed box grown
 //    by occupancy_pad(bounds) (exact separating-axis test, degenerate
 //    triangles included);

@@ -4,6 +4,7 @@
 #include <assimp/scene.h>
 
 #include <Eigen/Geometry>
+#include <assimp/DefaultIOSystem.h>
 #include <assimp/Importer.hpp>
 #include <cmath>
 #include <algorithm>
@@ -139,9 +140,56 @@ Result<bool> check_off_header(const std::string& path, uintmax_t size) {
   return true;
 }
 
+// assimp's own file access, recording each file it opens: an OBJ's .mtl, a
+// glTF's .bin are read through here, so a build system can depend on them.
+class RecordingIOSystem : public Assimp::DefaultIOSystem {
+ public:
+  explicit RecordingIOSystem(std::vector<std::string>* files) : files_(files) {}
+  Assimp::IOStream* Open(const char* file, const char* mode = "rb") override {
+    Assimp::IOStream* stream = DefaultIOSystem::Open(file, mode);
+    if (stream != nullptr && files_ != nullptr) {
+      std::error_code ec;
+      std::filesystem::path p = std::filesystem::absolute(file, ec);
+      const std::string name = ec ? std::string(file) : p.lexically_normal().string();
+      if (std::find(files_->begin(), files_->end(), name) == files_->end()) files_->push_back(name);
+    }
+    return stream;
+  }
+
+ private:
+  std::vector<std::string>* files_;
+};
+
 }  // namespace
 
-Result<Mesh> import_mesh(const std::string& path) {
+Result<Mesh> prepare_mesh(const std::vector<Eigen::Vector3d>& positions,
+                          const std::vector<std::array<uint32_t, 3>>& triangles) {
+  // The same path as a file's mesh: one instance placed by the identity.
+  constexpr uint32_t kUnused = std::numeric_limits<uint32_t>::max();
+  if (positions.size() >= kUnused) return refuse(ErrorCode::invalid_argument, "too many vertices");
+  std::vector<uint32_t> remap(positions.size(), kUnused);
+  Mesh mesh;
+  mesh.triangles.reserve(triangles.size());
+  for (const auto& t : triangles) {
+    std::array<uint32_t, 3> tri{};
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t v = t[k];
+      if (v >= positions.size()) return refuse(ErrorCode::invalid_argument, "triangle index out of range");
+      if (remap[v] == kUnused) {
+        if (!finite(positions[v])) return refuse(ErrorCode::invalid_argument, "NaN or infinite vertex coordinate");
+        remap[v] = static_cast<uint32_t>(mesh.positions.size());
+        mesh.positions.push_back(positions[v]);
+      }
+      tri[k] = remap[v];
+    }
+    mesh.triangles.push_back(tri);
+  }
+  if (mesh.triangles.empty()) return refuse(ErrorCode::invalid_argument, "no triangles");
+  join_identical(mesh);
+  return mesh;
+}
+
+Result<Mesh> import_mesh(const std::string& path, std::vector<std::string>* files_read) {
   namespace fs = std::filesystem;
   std::error_code ec;
   const fs::file_status st = fs::status(path, ec);
@@ -159,6 +207,7 @@ Result<Mesh> import_mesh(const std::string& path) {
   // and reorder meshes); degenerate triangles are kept on purpose; identical
   // vertices are joined afterwards, exactly (join_identical).
   Assimp::Importer importer;
+  importer.SetIOHandler(new RecordingIOSystem(files_read));  // owned by the importer
   const aiScene* scene = nullptr;
   try {
     scene = importer.ReadFile(path, aiProcess_Triangulate | aiProcess_ValidateDataStructure);

@@ -1,4 +1,4 @@
-// octbake: bakes meshes into ObjectTree files (INTERFACE.md section 2).
+// octbake: bakes meshes into ObjectTree files (docs/interface.md, "octbake").
 // Exit status: 0 all baked, 1 an input failed, 2 bad usage.
 #include <unistd.h>
 
@@ -10,11 +10,12 @@
 #include "bake.h"
 #include "cli.h"
 #include "for_scene.h"
+#include "octbake/version.h"
 
 int main(int argc, char** argv) {
   using namespace octbake;
   CLI::App app{"Bakes meshes (any format assimp reads) into conservative octree files (.oct).", "octbake"};
-  app.set_version_flag("--version", OCTBAKE_VERSION);
+  app.set_version_flag("--version", kLibraryVersion);
 
   BakeConfig config;
   config.jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
@@ -44,11 +45,12 @@ int main(int argc, char** argv) {
   app.add_flag("-q,--quiet", quiet, "No progress display");
   std::string for_scene;
   app.add_option("--for-scene", for_scene, "Bake only the FILEs whose model SCENE.json names, each to the depth its run needs");
+  app.add_option("--depfile", config.depfile, "Also write FILE: a Make rule OUTPUT: every file the import read (one input; implies --force)");
 
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForVersion&) {
-    std::printf("octbake %s\n", OCTBAKE_VERSION);
+    std::printf("octbake %s\n", kLibraryVersion);
     return 0;
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help
@@ -66,6 +68,11 @@ int main(int argc, char** argv) {
     std::fputs("octbake: error: no input files (see octbake --help)\n", stderr);
     return 2;
   }
+  if (!config.depfile.empty() && (config.inputs.size() != 1 || !config.pack.empty())) {
+    std::fputs("octbake: error: --depfile needs exactly one input and no --pack (see octbake --help)\n", stderr);
+    return 2;
+  }
+  config.force = config.force || !config.depfile.empty();  // a build system asked: the output must change time
   config.options.occupancy = *parse_occupancy(occupancy);
   std::tie(config.options.compression, config.options.compression_level) = *parse_compression(compress);
   config.progress = !quiet && ::isatty(STDERR_FILENO);

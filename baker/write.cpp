@@ -45,6 +45,19 @@ class Fd {
 
 std::atomic<uint64_t> temp_counter{0};
 
+// Canonical (big endian) lowercase hex of a hash: the same on every machine.
+std::string hex_of(XXH128_hash_t hash) {
+  XXH128_canonical_t canon;
+  XXH128_canonicalFromHash(&canon, hash);
+  static constexpr char kHex[] = "0123456789abcdef";
+  std::string hex;
+  for (unsigned char b : canon.digest) {
+    hex += kHex[b >> 4];
+    hex += kHex[b & 15];
+  }
+  return hex;
+}
+
 }  // namespace
 
 Result<std::string> hash_file(const std::string& path) {
@@ -70,17 +83,12 @@ Result<std::string> hash_file(const std::string& path) {
     if (n == 0) break;
     XXH3_128bits_update(state, buf.data(), static_cast<size_t>(n));
   }
-  XXH128_canonical_t canon;
-  XXH128_canonicalFromHash(&canon, XXH3_128bits_digest(state));
+  const XXH128_hash_t digest = XXH3_128bits_digest(state);
   XXH3_freeState(state);
-  static constexpr char kHex[] = "0123456789abcdef";
-  std::string hex;
-  for (unsigned char b : canon.digest) {
-    hex += kHex[b >> 4];
-    hex += kHex[b & 15];
-  }
-  return hex;
+  return hex_of(digest);
 }
+
+std::string hash_bytes(std::span<const uint8_t> bytes) { return hex_of(XXH3_128bits(bytes.data(), bytes.size())); }
 
 Result<uint64_t> write_file_atomic(const std::string& path, std::span<const uint8_t> bytes) {
   namespace fs = std::filesystem;

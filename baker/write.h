@@ -13,6 +13,8 @@ namespace octbake {
 // refers to (an OBJ's .mtl, a glTF's .bin) are not. Errors: not_found, io_error
 // (including "is a directory"); the message is the reason, without the path.
 Result<std::string> hash_file(const std::string& path);
+// The same hash of bytes in memory.
+std::string hash_bytes(std::span<const uint8_t> bytes);
 
 // Writes `bytes` to `path` atomically: a temp file `.<name>.tmp.<pid>.<n>` in
 // the same folder (O_EXCL), fsync, rename over `path`, fsync the folder. A

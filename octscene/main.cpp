@@ -1,4 +1,4 @@
-// octscene: runs scenes of baked ObjectTrees (INTERFACE.md section 5).
+// octscene: runs scenes of baked ObjectTrees (docs/interface.md section 5).
 // Exit status: 0 ok, 1 bad scene, load failure or budget exceeded, 2 bad usage.
 #include <sys/resource.h>
 #include <unistd.h>
@@ -178,7 +178,7 @@ void print_summary(const RunArgs& args, const Loaded& l, const RunResult& r) {
     timings["frame_ms_p99"] = r.frame_ms_p99;
     timings["peak_rss_mb"] = rss;
     j["timings"] = timings;
-    // INTERFACE.md section 5 names these at the top level: kept there too.
+    // docs/interface.md section 5 names these at the top level: kept there too.
     for (const auto& [key, value] : timings.items()) j[key] = value;
     std::printf("%s\n", j.dump().c_str());
     return;

@@ -1,4 +1,4 @@
-// The frame loop behind `octscene run` (INTERFACE.md sections 5 and 6), as a
+// The frame loop behind `octscene run` (docs/interface.md sections 5 and 6), as a
 // library call so other subcommands (`octscene trade`) can run a scene under
 // many settings and see every frame's reported pairs.
 #pragma once
@@ -80,7 +80,7 @@ Result<RunResult> run_scene(const Scene& scene, const SceneModels& models, const
 Result<RunResult> run_scene(const Scene& scene, ModelLibrary& library, const RunOptions& options,
                             const std::function<void(const FrameReport&)>& on_frame);
 
-// The collision log (INTERFACE.md section 6).
+// The collision log (docs/interface.md section 6).
 constexpr const char* kLogHeader = "frame,time,a,b,depth_a,depth_b,box_tests,ax,ay,az,bx,by,bz";
 // Appends one log line (with '\n') per collision; numbers round-trip and do not
 // depend on the locale.

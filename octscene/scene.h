@@ -1,4 +1,4 @@
-// Scene files (INTERFACE.md section 4): strict parsing and validation.
+// Scene files (docs/interface.md section 4): strict parsing and validation.
 #pragma once
 #include <cstdint>
 #include <string>

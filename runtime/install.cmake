@@ -1,30 +1,54 @@
-# Installs the runtime as a CMake package:
-#   find_package(octbake) + target_link_libraries(app PRIVATE octbake::runtime)
-# Headers: octbake.h and octbake/*.h (they include only Eigen and the standard
-# library). The static library needs zstd at link time; FlatBuffers is used
-# header-only and assimp not at all, so neither is a dependency of the package.
+# Install rules of the runtime, and the package config every component shares:
+#   find_package(octbake [COMPONENTS baker tools])
+#   target_link_libraries(app PRIVATE octbake::runtime)   # component runtime
+#   target_link_libraries(app PRIVATE octbake::baker)     # component baker
+#   octbake_add_assets(...)                               # needs octbake::octbake (tools)
+# Components: `runtime` (library, headers, package config, pkg-config file),
+# `baker` (library + octbake/baker.h, see baker/CMakeLists.txt) and `tools`
+# (the octbake and octscene executables). `cmake --install B --component runtime`
+# installs the library package alone.
+# Headers include only Eigen and the standard library. A static runtime needs
+# zstd at link time (found again by the package config, shared or static);
+# FlatBuffers is used header-only and assimp not at all.
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
-# A static library's private dependencies still reach its consumers' link line.
-target_link_libraries(octbake_runtime PRIVATE $<INSTALL_INTERFACE:zstd::libzstd_shared>)
-
-# Everything here is component "runtime": `cmake --install B --component runtime`
-# installs the library package alone, whatever tools the build also installs.
 install(TARGETS octbake_runtime EXPORT octbakeTargets
-  ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT runtime)
+  ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT runtime
+  LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT runtime NAMELINK_COMPONENT runtime
+  RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR} COMPONENT runtime)
 install(FILES ${CMAKE_CURRENT_SOURCE_DIR}/include/octbake.h DESTINATION ${CMAKE_INSTALL_INCLUDEDIR} COMPONENT runtime)
 install(DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR}/include/octbake DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
   COMPONENT runtime FILES_MATCHING PATTERN "*.h")
-install(FILES ${CMAKE_CURRENT_BINARY_DIR}/include/octbake/version.h DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/octbake
-  COMPONENT runtime)
+install(FILES ${CMAKE_CURRENT_BINARY_DIR}/include/octbake/version.h ${CMAKE_CURRENT_BINARY_DIR}/include/octbake/export.h
+  DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/octbake COMPONENT runtime)
 
-set(octbake_cmake_dir ${CMAKE_INSTALL_LIBDIR}/cmake/octbake)
-install(EXPORT octbakeTargets NAMESPACE octbake:: DESTINATION ${octbake_cmake_dir} COMPONENT runtime)
+set(OCTBAKE_CMAKE_INSTALL_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/octbake CACHE INTERNAL "")
+install(EXPORT octbakeTargets NAMESPACE octbake:: DESTINATION ${OCTBAKE_CMAKE_INSTALL_DIR} COMPONENT runtime)
+# The package config records how the runtime was built (static: find zstd).
+if(BUILD_SHARED_LIBS)
+  set(OCTBAKE_SHARED ON)
+else()
+  set(OCTBAKE_SHARED OFF)
+endif()
 configure_package_config_file(${CMAKE_CURRENT_SOURCE_DIR}/cmake/octbakeConfig.cmake.in
-  ${CMAKE_CURRENT_BINARY_DIR}/octbakeConfig.cmake INSTALL_DESTINATION ${octbake_cmake_dir})
+  ${CMAKE_CURRENT_BINARY_DIR}/octbakeConfig.cmake INSTALL_DESTINATION ${OCTBAKE_CMAKE_INSTALL_DIR})
 # 0.x: minor versions may break the API, so only the same minor is compatible.
 write_basic_package_version_file(${CMAKE_CURRENT_BINARY_DIR}/octbakeConfigVersion.cmake
   VERSION ${PROJECT_VERSION} COMPATIBILITY SameMinorVersion)
+# The CMake modules of the package (cmake/*.cmake at the top of the tree:
+# zstd lookup, octbake_add_assets, and whatever else lives there).
+file(GLOB octbake_cmake_modules ${PROJECT_SOURCE_DIR}/cmake/*.cmake)
 install(FILES ${CMAKE_CURRENT_BINARY_DIR}/octbakeConfig.cmake ${CMAKE_CURRENT_BINARY_DIR}/octbakeConfigVersion.cmake
-  DESTINATION ${octbake_cmake_dir} COMPONENT runtime)
+  ${octbake_cmake_modules} DESTINATION ${OCTBAKE_CMAKE_INSTALL_DIR} COMPONENT runtime)
+
+# pkg-config: `pkg-config --cflags --libs octbake`.
+if(BUILD_SHARED_LIBS)
+  set(OCTBAKE_PC_CFLAGS "")
+else()
+  set(OCTBAKE_PC_CFLAGS "-DOCTBAKE_STATIC_DEFINE")
+endif()
+file(RELATIVE_PATH OCTBAKE_PC_TO_PREFIX /${CMAKE_INSTALL_LIBDIR}/pkgconfig /)
+string(REGEX REPLACE "/$" "" OCTBAKE_PC_TO_PREFIX "${OCTBAKE_PC_TO_PREFIX}")
+configure_file(${CMAKE_CURRENT_SOURCE_DIR}/cmake/octbake.pc.in ${CMAKE_CURRENT_BINARY_DIR}/octbake.pc @ONLY)
+install(FILES ${CMAKE_CURRENT_BINARY_DIR}/octbake.pc DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig COMPONENT runtime)

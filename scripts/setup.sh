@@ -3,6 +3,7 @@
 set -euo pipefail
 packages=(
   build-essential cmake pkg-config git
+  ninja-build                              # the consumer tests build with Ninja and with Make
   libassimp-dev assimp-testmodels          # mesh import + real test meshes
   libflatbuffers-dev flatbuffers-compiler  # baked file format
   libeigen3-dev libzstd-dev                # math, level compression

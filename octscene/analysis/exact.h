@@ -15,7 +15,7 @@
 #include <utility>
 #include <vector>
 
-#include "import.h"
+#include "octbake/baker.h"  // Mesh, load_mesh
 #include "octbake/pose.h"
 #include "octbake/result.h"
 

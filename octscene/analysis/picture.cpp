@@ -134,9 +134,9 @@ std::optional<Mesh> load_mesh(const std::string& explicit_path, const std::strin
     std::fprintf(stderr, "octscene: note: no mesh for \"%s\" in %s: drawing boxes only\n", model.c_str(), dir.c_str());
     return std::nullopt;
   }
-  auto mesh = import_mesh(path);
+  auto mesh = octbake::load_mesh(path);  // the error names the path
   if (!mesh) {
-    std::fprintf(stderr, "octscene: warning: %s: %s: drawing boxes only\n", path.c_str(), mesh.error().message.c_str());
+    std::fprintf(stderr, "octscene: warning: %s: drawing boxes only\n", mesh.error().message.c_str());
     return std::nullopt;
   }
   return std::move(*mesh);

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "import.h"
+#include "octbake/baker.h"  // Mesh
 #include "octbake/object_tree.h"
 #include "raster.h"
 #include "scene.h"

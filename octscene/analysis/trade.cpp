@@ -17,7 +17,6 @@
 #include "cli_util.h"
 #include "exact.h"
 #include "run.h"
-#include "write.h"
 
 namespace octbake::scene {
 
@@ -108,10 +107,10 @@ Result<TradeReport> run_trade(const Scene& scene, ModelLibrary& library, const T
       return Error{ErrorCode::not_found, "no mesh for model \"" + name + "\" in " + options.meshes +
                                              " (tried .obj .ply .stl .off .gltf .glb .dae .fbx); use --meshes DIR"};
     }
-    auto mesh = import_mesh(path);
-    if (!mesh) return Error{mesh.error().code, path + ": " + mesh.error().message};
+    auto mesh = load_mesh(path);  // the error names the path
+    if (!mesh) return mesh.error();
     const std::string& baked_hash = models->trees[k].info().source_hash;
-    auto hash = hash_file(path);
+    auto hash = source_hash(path);
     if (hash && *hash != baked_hash) {
       report.warnings.push_back("mesh " + path + " hashes to " + *hash + " but tree \"" + name +
                                 "\" was baked from a file hashing to " + baked_hash);

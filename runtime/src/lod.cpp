@@ -1,4 +1,4 @@
-// Depth policies (INTERFACE.md section 5).
+// Depth policies (docs/interface.md section 5).
 #include "octbake/lod.h"
 
 #include <algorithm>

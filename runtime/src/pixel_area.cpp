@@ -1,4 +1,4 @@
-// Pixel area of a posed box (INTERFACE.md section 7): its faces clipped to the
+// Pixel area of a posed box (docs/interface.md section 7): its faces clipped to the
 // view frustum in camera space (Sutherland-Hodgman), projected, then the area
 // of the 2D convex hull (Andrew's monotone chain, shoelace formula).
 #include <algorithm>

@@ -22,6 +22,7 @@
 #include "octbake/format.h"
 #include "octbake/object_tree.h"
 #include "octbake/result.h"
+#include "octbake/export.h"
 
 namespace octbake {
 
@@ -33,7 +34,7 @@ struct LoadStats {
   uint64_t bytes_decompressed = 0;  // decoded bytes of those levels (raw ones copied)
 };
 
-class BakedFile {
+class OCTBAKE_API BakedFile {
  public:
   // Errors: not_found (no such file), io_error, truncated (shorter than its
   // size prefix, or than any octbake file), bad_identifier, unsupported_version
@@ -77,7 +78,7 @@ class BakedFile {
 
 // Models a scene names, from a folder of .oct files or from a pack, opening
 // only the files that hold them.
-class ModelLibrary {
+class OCTBAKE_API ModelLibrary {
  public:
   // `source`: a folder (model "x" is "<folder>/x.oct", opened when first
   // asked for; a file holding a single tree of another name still serves it)

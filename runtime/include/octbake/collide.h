@@ -55,6 +55,7 @@
 
 #include "octbake/object_tree.h"
 #include "octbake/pose.h"
+#include "octbake/export.h"
 
 namespace octbake {
 
@@ -88,10 +89,10 @@ struct PairCache {
 };
 
 // Box c of `p`'s tree at depth p.depth, placed in the world.
-OrientedBox leaf_box(const PlacedTree& p, const BoxCoord& c);
+OCTBAKE_API OrientedBox leaf_box(const PlacedTree& p, const BoxCoord& c);
 
 // Does any leaf of a (at a.depth) overlap any leaf of b (at b.depth)?
-PairTest collide(const PlacedTree& a, const PlacedTree& b);
+OCTBAKE_API PairTest collide(const PlacedTree& a, const PlacedTree& b);
 
 // collide() trying the cached leaf pair first. The cached pair is used only if
 // the cache holds the same trees and depths in this argument order and both
@@ -104,7 +105,7 @@ PairTest collide(const PlacedTree& a, const PlacedTree& b);
 PairTest collide(const PlacedTree& a, const PlacedTree& b, PairCache& cache);
 
 // Every overlapping leaf pair (no early out), for response and debugging.
-PairTest collide_all(const PlacedTree& a, const PlacedTree& b, std::vector<LeafPair>& out);
+OCTBAKE_API PairTest collide_all(const PlacedTree& a, const PlacedTree& b, std::vector<LeafPair>& out);
 
 // ---- Reference implementation: for tests and benchmarks only -------------
 // The plain scalar descent this library shipped before: both trees split at

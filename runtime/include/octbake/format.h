@@ -8,6 +8,7 @@
 
 #include "octbake/octree.h"
 #include "octbake/result.h"
+#include "octbake/export.h"
 
 namespace octbake {
 
@@ -58,6 +59,6 @@ struct TreeToEncode {
 // Preconditions (asserted): at least one tree; unique, non-empty names;
 // masks.depth() == options.depth in 1..kMaxDepth; masks[d].size() equal to
 // the box count of depth d; finite bounds with min <= max.
-std::vector<uint8_t> encode_file(std::span<const TreeToEncode> trees, const std::string& baker_version);
+OCTBAKE_API std::vector<uint8_t> encode_file(std::span<const TreeToEncode> trees, const std::string& baker_version);
 
 }  // namespace octbake

@@ -1,10 +1,11 @@
-// Pixel area (INTERFACE.md section 7) and the depth policies built on it.
+// Pixel area (docs/interface.md section 7) and the depth policies built on it.
 #pragma once
 #include <Eigen/Core>
 #include <span>
 #include <vector>
 
 #include "octbake/pose.h"
+#include "octbake/export.h"
 
 namespace octbake {
 
@@ -27,7 +28,7 @@ struct Camera {
 // (0, 180); the horizontal fov follows from the viewport aspect; a near plane
 // <= 0 acts as a tiny positive one. The far plane is ignored. A viewport with
 // a side <= 0 gives 0.
-double pixel_area(const Camera& camera, const OrientedBox& box);
+OCTBAKE_API double pixel_area(const Camera& camera, const OrientedBox& box);
 
 enum class LodPolicy { fixed, thesis, screen };
 
@@ -40,13 +41,13 @@ struct LodSettings {
 
 // floor(area / (a_min + a_max) * max_depth) + min_depth, clamped to
 // [min_depth, max_depth]; min_depth when a_min + a_max == 0.
-int thesis_depth(double area, double a_min, double a_max, int min_depth, int max_depth);
+OCTBAKE_API int thesis_depth(double area, double a_min, double a_max, int min_depth, int max_depth);
 // Smallest d in [min_depth, max_depth] with sqrt(area) / 2^d <= tolerance,
 // else max_depth.
-int screen_depth(double area, int min_depth, int max_depth, double tolerance);
+OCTBAKE_API int screen_depth(double area, int min_depth, int max_depth, double tolerance);
 // One depth per object. `areas` are the objects' pixel areas; `max_depths`
 // each object's deepest usable depth (settings.max_depth is clamped to it).
-std::vector<int> choose_depths(const LodSettings& settings, std::span<const double> areas,
+OCTBAKE_API std::vector<int> choose_depths(const LodSettings& settings, std::span<const double> areas,
                                std::span<const int> max_depths);
 
 }  // namespace octbake

@@ -8,13 +8,14 @@
 #include <span>
 
 #include "octbake/lod.h"
+#include "octbake/export.h"
 
 namespace octbake {
 
 // Orientation after `seconds` of spinning at `angular_velocity` (radians per
 // second about world axes through the object's position), applied after q0:
 // q(t) = R(w, |w| t) * q0. Zero angular velocity returns q0 unchanged.
-Eigen::Quaterniond spun(const Eigen::Quaterniond& q0, const Eigen::Vector3d& angular_velocity, double seconds);
+OCTBAKE_API Eigen::Quaterniond spun(const Eigen::Quaterniond& q0, const Eigen::Vector3d& angular_velocity, double seconds);
 
 // One key of a camera path: at `frame` the camera is at `position` looking at
 // `look_at`.
@@ -28,6 +29,6 @@ struct CameraKey {
 // around `frame` (frames strictly ascending): the first key's values before
 // it, the last key's after it; up, fov, viewport, near and far stay those of
 // `base`. An empty path returns `base`.
-Camera camera_on_path(const Camera& base, std::span<const CameraKey> path, int64_t frame);
+OCTBAKE_API Camera camera_on_path(const Camera& base, std::span<const CameraKey> path, int64_t frame);
 
 }  // namespace octbake

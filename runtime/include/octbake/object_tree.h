@@ -11,10 +11,11 @@
 
 #include "octbake/format.h"
 #include "octbake/octree.h"
+#include "octbake/export.h"
 
 namespace octbake {
 
-class ObjectTree {
+class OCTBAKE_API ObjectTree {
  public:
   ObjectTree() = default;
   // `masks` holds depths 0..loaded-1 (masks.depth() == loaded depth).

@@ -1,11 +1,12 @@
 // The ObjectTree's occupancy, shared by the baker (which builds it) and the
-// runtime (which decodes it). INTERFACE.md section 1; encoding in schema/.
+// runtime (which decodes it). docs/interface.md section 1; encoding in schema/.
 #pragma once
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
+#include "octbake/export.h"
 
 namespace octbake {
 
@@ -16,7 +17,7 @@ struct Aabb {
 };
 
 enum class Occupancy : uint8_t { surface = 0, solid = 1, vertices = 2 };
-const char* to_string(Occupancy mode);
+OCTBAKE_API const char* to_string(Occupancy mode);
 
 // Child octant j of a box: x offset = bit 0, y = bit 1, z = bit 2.
 // (Format-fixing: the schema's level encoding uses this order.)
@@ -33,7 +34,7 @@ struct BoxCoord {
 // d = 0..depth()-1. The root (depth 0) is always occupied; the boxes of depth
 // d+1 are the set bits of masks[d] in order. A child bit is set only under an
 // occupied parent, so conservative nesting holds by construction.
-struct OctreeMasks {
+struct OCTBAKE_API OctreeMasks {
   Aabb bounds;  // the root box: the mesh's local axis-aligned bounds
   std::vector<std::vector<uint8_t>> masks;
 

@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 
 #include "octbake/octree.h"
+#include "octbake/export.h"
 
 namespace octbake {
 
@@ -21,8 +22,8 @@ struct OrientedBox {
   Eigen::Vector3d half{0, 0, 0};                        // half extents, >= 0
 };
 
-OrientedBox place(const Aabb& local, const Pose& pose);
+OCTBAKE_API OrientedBox place(const Aabb& local, const Pose& pose);
 // World axis-aligned bounds of a placed box.
-Aabb world_bounds(const OrientedBox& box);
+OCTBAKE_API Aabb world_bounds(const OrientedBox& box);
 
 }  // namespace octbake

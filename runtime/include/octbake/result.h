@@ -3,6 +3,7 @@
 #include <string>
 #include <utility>
 #include <variant>
+#include "octbake/export.h"
 
 namespace octbake {
 
@@ -17,7 +18,7 @@ enum class ErrorCode {
   invalid_argument,
 };
 
-const char* to_string(ErrorCode code);
+OCTBAKE_API const char* to_string(ErrorCode code);
 
 struct Error {
   ErrorCode code;

@@ -15,6 +15,7 @@
 #include "octbake/object_tree.h"
 #include "octbake/pose.h"
 #include "octbake/world_tree.h"
+#include "octbake/export.h"
 
 namespace octbake {
 
@@ -61,7 +62,7 @@ struct FrameStats {
   uint64_t area_refreshes = 0;  // objects whose pixel area was recomputed
 };
 
-// Frame loop (INTERFACE.md sections 4 and 5). Per step, for frame f:
+// Frame loop (docs/interface.md sections 4 and 5). Per step, for frame f:
 //  0. Camera: with a camera path, the camera of frame f (a moved camera
 //     makes every area stale).
 //  1. LOD: recompute the pixel area of every object whose leaf set changed
@@ -85,7 +86,7 @@ struct FrameStats {
 //     timesteps. A component that would take the position (the mesh origin)
 //     out of the world box while moving outward is reversed and the position
 //     mirrored back inside about that face.
-class World {
+class OCTBAKE_API World {
  public:
   // Every object's tree must be non-null and outlive the World; poses valid
   // (asserted), camera_path frames strictly ascending (asserted).

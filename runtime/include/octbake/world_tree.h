@@ -28,10 +28,11 @@
 #include <vector>
 
 #include "octbake/octree.h"
+#include "octbake/export.h"
 
 namespace octbake {
 
-class WorldTree {
+class OCTBAKE_API WorldTree {
  public:
   // depth 0..10 (cells per axis = 2^depth). The world box must have a positive
   // extent on every axis.

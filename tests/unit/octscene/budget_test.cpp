@@ -166,7 +166,7 @@ TEST(Budget, JsonSummaryHasFormatOptionsCountersAndTimingsApart) {
   EXPECT_EQ(j["startup"]["levels_decoded"], 6);  // 3 levels of 2 trees
   for (const char* key : {"load_ms", "run_ms", "frames_per_second", "frame_ms_mean", "frame_ms_p99", "peak_rss_mb"}) {
     EXPECT_TRUE(j["timings"].contains(key)) << key;
-    EXPECT_EQ(j[key], j["timings"][key]) << key;  // INTERFACE.md's top-level keys stay
+    EXPECT_EQ(j[key], j["timings"][key]) << key;  // docs/interface.md's top-level keys stay
   }
   EXPECT_FALSE(j["startup"].contains("load_ms"));
 }

@@ -1,6 +1,6 @@
 // Scene motion through `octscene run` and run_scene(): spinning objects
 // ("angular_velocity") and a moving camera ("camera_path"), the rules of
-// INTERFACE.md section 4 as World applies them, and bit-identical logs.
+// docs/interface.md section 4 as World applies them, and bit-identical logs.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -1,4 +1,4 @@
-// LOD policies on hand-made area sets (INTERFACE.md section 5).
+// LOD policies on hand-made area sets (docs/interface.md section 5).
 #include <gtest/gtest.h>
 
 #include <cmath>
