@@ -286,9 +286,10 @@ OctreeMasks build_split(const std::vector<Prim>& prims, const Aabb& bounds, int 
   std::vector<std::vector<uint8_t>> masks = TreeBuilder(prims, bounds, depth, pad, interior).top(split, subtrees);
 
   // Progress in primitive references at the split depth: a subtree's share of
-  // the work grows with the primitives handed to it.
+  // the work grows with the primitives handed to it (+1: every part counts).
+  auto weight = [](const Subtree& s) { return uint64_t{s.prims.size()} + 1; };
   uint64_t total = 0;
-  for (const Subtree& s : subtrees) total += s.prims.size();
+  for (const Subtree& s : subtrees) total += weight(s);
   std::mutex progress_mu;
   uint64_t done = 0;
   if (control.progress) control.progress(0, total);
@@ -302,11 +303,11 @@ OctreeMasks build_split(const std::vector<Prim>& prims, const Aabb& bounds, int 
   run_tasks(order.size(), control.threads, [&](size_t k) {
     Subtree& s = subtrees[order[k]];
     parts[order[k]] = TreeBuilder(prims, bounds, depth, pad, interior).subtree(split, s);
-    const uint64_t size = s.prims.size();
+    const uint64_t w = weight(s);
     std::vector<uint32_t>().swap(s.prims);
     if (!control.progress) return;
     const std::lock_guard lock(progress_mu);
-    done += size;
+    done += w;
     control.progress(done, total);
   });
 
