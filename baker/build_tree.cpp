@@ -8,6 +8,7 @@
 #include <exception>
 #include <limits>
 #include <mutex>
+#include <system_error>
 #include <thread>
 
 #include "occupancy.h"
@@ -251,13 +252,20 @@ void run_tasks(size_t n, ThreadBudget* budget, const Task& task) {
   };
   {
     std::vector<std::jthread> helpers;  // joined before `failure` is read
+    bool spawning = budget != nullptr;
     for (size_t i; (i = next.fetch_add(1)) < n;) {
       // A helper only when an item is left besides the one this thread takes.
-      while (budget != nullptr && next.load() < n && budget->try_acquire())
-        helpers.emplace_back([&] {
-          work();
+      while (spawning && next.load() < n && budget->try_acquire()) {
+        try {
+          helpers.emplace_back([&] {
+            work();
+            budget->release();
+          });
+        } catch (const std::system_error&) {  // no thread to be had: go on with those running
           budget->release();
-        });
+          spawning = false;
+        }
+      }
       try {
         task(i);
       } catch (...) {
