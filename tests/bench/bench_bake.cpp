@@ -155,7 +155,8 @@ void BM_BakeScanSpeedup(benchmark::State& state) {
       const auto start = std::chrono::steady_clock::now();
       built[threads - 1] = build_tree(mesh, depth, Occupancy::surface, {&budget, {}});
       const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      const double process = cpu_seconds(CLOCK_PROCESS_CPUTIME_ID) - p0, own = cpu_seconds(CLOCK_THREAD_CPUTIME_ID) - t0;
+      const double process = cpu_seconds(CLOCK_PROCESS_CPUTIME_ID) - p0;
+      const double own = cpu_seconds(CLOCK_THREAD_CPUTIME_ID) - t0;
       wall[threads - 1] = std::min(wall[threads - 1], secs);
       if (threads == 1)
         cpu1 = std::min(cpu1, process);
