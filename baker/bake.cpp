@@ -129,6 +129,7 @@ class Reporter {
     for (const auto& [i, p] : in_flight_) {
       c.triangles_done += p.triangles * p.fraction;
       c.triangles_known += p.triangles;
+      c.files_writing += p.fraction >= 1;
     }
     c.seconds = seconds();
     std::fputs(progress_line(c).c_str(), err_);

@@ -184,8 +184,9 @@ std::string progress_line(const ProgressCounts& c) {
   if (c.seconds <= 0 || c.triangles_done <= 0) return s;
   const double rate = c.triangles_done / c.seconds;
   appendf(s, ", %s tri/s", human_count(rate).c_str());
-  if (c.files_waiting == 0 && c.files_done < c.files_total)
-    s += ", ETA " + human_duration(std::max(0.0, c.triangles_known - c.triangles_done) / rate);
+  const double left = c.triangles_known - c.triangles_done;
+  if (c.files_waiting == 0 && left > 0) s += ", ETA " + human_duration(left / rate);
+  if (c.files_writing > 0) appendf(s, ", writing %zu", c.files_writing);
   return s;
 }
 

@@ -58,14 +58,17 @@ struct ProgressCounts {
   size_t files_waiting = 0;      // not imported yet, so their size is unknown
   double triangles_done = 0;
   double triangles_known = 0;    // of the finished and the in-progress meshes
+  size_t files_writing = 0;      // built, being compressed and written (not timed)
   double seconds = 0;
 };
 
 // The updating line on a terminal, e.g.
 //   "baking 1/3 files, 35.2K/70.3K tri, 12.1K tri/s, ETA 3 s".
 // The rate is triangles_done / seconds (none before any triangle is done);
-// the ETA, (triangles_known - triangles_done) / rate, only once no file is
-// waiting, since the work of files not yet read is unknown.
+// the ETA, (triangles_known - triangles_done) / rate, of the octree builds
+// left, only once no file is waiting (the work of files not yet read is
+// unknown) and while some build is left. Files past their build add
+// ", writing N" (compression time is not predicted).
 std::string progress_line(const ProgressCounts& c);
 
 // The final line, e.g. "octbake: 5 baked, 0 up to date, 1 failed in 0.42 s (1.2M tri/s)":

@@ -8,7 +8,8 @@
 
 #include <cmath>
 #include <nlohmann/json.hpp>
-#include <regex>
+#include <cstdio>
+#include <optional>
 
 #include "build_tree.h"
 #include "cli_test_util.h"
@@ -89,11 +90,26 @@ struct Summary {
   int baked = -1, up_to_date = -1, failed = -1;
 };
 std::optional<Summary> parse_summary(const std::string& line) {
-  static const std::regex re(
-      R"(octbake: (\d+) baked, (\d+) up to date, (\d+) failed in \d+\.\d\d s \(\d+(\.\d)?[KM]? tri/s\))");
-  std::smatch m;
-  if (!std::regex_match(line, m, re)) return std::nullopt;
-  return Summary{std::stoi(m[1]), std::stoi(m[2]), std::stoi(m[3])};
+  Summary s;
+  double seconds = 0;
+  char rate[32];
+  int end = -1;
+  if (std::sscanf(line.c_str(), "octbake: %d baked, %d up to date, %d failed in %lf s (%31[0-9.KM] tri/s)%n", &s.baked,
+                  &s.up_to_date, &s.failed, &seconds, rate, &end) != 5 ||
+      end != static_cast<int>(line.size()))
+    return std::nullopt;
+  return s;
+}
+
+// "baking F/N files, D/K tri[, R tri/s[, ETA ...][, writing 1]]"
+bool is_progress_line(const std::string& line) {
+  int files = -1, end = -1;
+  char done[32], known[32];
+  if (std::sscanf(line.c_str(), "baking %d/2 files, %31[0-9.KM]/%31[0-9.KM] tri%n", &files, done, known, &end) != 3 ||
+      end < 0)
+    return false;
+  const std::string rest = line.substr(static_cast<size_t>(end));
+  return rest.empty() || (rest.rfind(", ", 0) == 0 && rest.find(" tri/s") != std::string::npos);
 }
 
 TEST(CliSummary, OneLineOnStderrWhenNotATerminal) {
@@ -197,7 +213,6 @@ TEST(CliProgress, OnATerminalShowsAProgressLineThenTheSummary) {
   if (!current.empty()) shown.push_back(current);
   ASSERT_GE(shown.size(), 3u) << r.err;
   EXPECT_EQ(shown.front(), "baking 0/2 files, 0/0 tri") << r.err;
-  const std::regex progress(R"(baking (\d)/2 files, [0-9.KM]+/[0-9.KM]+ tri(, [0-9.KM]+ tri/s(, ETA .*)?)?)");
   size_t errors = 0, summaries = 0;
   for (size_t k = 0; k < shown.size(); ++k) {
     const std::string& s = shown[k];
@@ -208,7 +223,7 @@ TEST(CliProgress, OnATerminalShowsAProgressLineThenTheSummary) {
         EXPECT_EQ(k, shown.size() - 1) << "the summary comes last";
       }
     } else {
-      EXPECT_TRUE(std::regex_match(s, progress)) << s;
+      EXPECT_TRUE(is_progress_line(s)) << s;
     }
   }
   EXPECT_EQ(errors, 1u) << r.err;

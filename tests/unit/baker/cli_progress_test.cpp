@@ -56,6 +56,14 @@ TEST(CliProgressText, NoEtaWhileFilesAreUnreadAndNoRateBeforeWork) {
   start.triangles_known = 1000;
   EXPECT_EQ(progress_line(start), "baking 0/2 files, 0/1000 tri");
 
+  // The last build done, its file being compressed: no ETA, "writing".
+  ProgressCounts writing;
+  writing.files_total = 1;
+  writing.triangles_known = writing.triangles_done = 70312;
+  writing.files_writing = 1;
+  writing.seconds = 4;
+  EXPECT_EQ(progress_line(writing), "baking 0/1 files, 70.3K/70.3K tri, 17.6K tri/s, writing 1");
+
   // Every file finished: no ETA.
   ProgressCounts end;
   end.files_total = end.files_done = 2;
