@@ -232,47 +232,50 @@ Interior fill_interior(const OctreeMasks& surface) {
   return in;
 }
 
-// Runs task(i) for every i in [0, n) on the calling thread plus helpers that
-// take free slots from `budget` (null: none). Slots are looked for before
-// each item, so threads another job gives back join a build in progress.
-// The first exception thrown by any task stops the rest and is rethrown here.
-template <class Task>
-void run_tasks(size_t n, ThreadBudget* budget, const Task& task) {
+// Runs every item i in [0, n) on the calling thread plus helpers that take
+// free slots from `budget` (null: none): each thread makes its own worker,
+// `make_worker()`, and calls worker(i) for the items it takes. Slots are
+// looked for before each item, so threads another job gives back join a
+// build in progress. The first exception thrown by any worker stops the rest
+// and is rethrown here, after every helper has finished.
+template <class MakeWorker>
+void run_tasks(size_t n, ThreadBudget* budget, const MakeWorker& make_worker) {
   std::atomic<size_t> next{0};
   std::mutex mu;
   std::exception_ptr failure;
-  auto work = [&] {
+  auto fail = [&] {
+    const std::lock_guard lock(mu);
+    if (!failure) failure = std::current_exception();
+    next.store(n);
+  };
+  auto helper = [&] {
     try {
-      for (size_t i; (i = next.fetch_add(1)) < n;) task(i);
+      auto worker = make_worker();
+      for (size_t i; (i = next.fetch_add(1)) < n;) worker(i);
     } catch (...) {
-      const std::lock_guard lock(mu);
-      if (!failure) failure = std::current_exception();
-      next.store(n);
+      fail();
     }
+    budget->release();
   };
   {
     std::vector<std::jthread> helpers;  // joined before `failure` is read
     bool spawning = budget != nullptr;
-    for (size_t i; (i = next.fetch_add(1)) < n;) {
-      // A helper only when an item is left besides the one this thread takes.
-      while (spawning && next.load() < n && budget->try_acquire()) {
-        try {
-          helpers.emplace_back([&] {
-            work();
+    try {
+      auto worker = make_worker();
+      for (size_t i; (i = next.fetch_add(1)) < n;) {
+        // A helper only when an item is left besides the one this thread takes.
+        while (spawning && next.load() < n && budget->try_acquire()) {
+          try {
+            helpers.emplace_back(helper);
+          } catch (const std::system_error&) {  // no thread to be had: go on with those running
             budget->release();
-          });
-        } catch (const std::system_error&) {  // no thread to be had: go on with those running
-          budget->release();
-          spawning = false;
+            spawning = false;
+          }
         }
+        worker(i);
       }
-      try {
-        task(i);
-      } catch (...) {
-        const std::lock_guard lock(mu);
-        if (!failure) failure = std::current_exception();
-        next.store(n);
-      }
+    } catch (...) {
+      fail();
     }
   }
   if (failure) std::rethrow_exception(failure);
@@ -308,15 +311,18 @@ OctreeMasks build_split(const std::vector<Prim>& prims, const Aabb& bounds, int 
   std::stable_sort(order.begin(), order.end(),
                    [&](uint32_t a, uint32_t b) { return subtrees[a].prims.size() > subtrees[b].prims.size(); });
   std::vector<std::vector<std::vector<uint8_t>>> parts(subtrees.size());
-  run_tasks(order.size(), control.threads, [&](size_t k) {
-    Subtree& s = subtrees[order[k]];
-    parts[order[k]] = TreeBuilder(prims, bounds, depth, pad, interior).subtree(split, s);
-    const uint64_t w = weight(s);
-    std::vector<uint32_t>().swap(s.prims);
-    if (!control.progress) return;
-    const std::lock_guard lock(progress_mu);
-    done += w;
-    control.progress(done, total);
+  // One builder per thread, so its scratch lists are reused from task to task.
+  run_tasks(order.size(), control.threads, [&] {
+    return [&, builder = TreeBuilder(prims, bounds, depth, pad, interior)](size_t k) mutable {
+      Subtree& s = subtrees[order[k]];
+      parts[order[k]] = builder.subtree(split, s);
+      const uint64_t w = weight(s);
+      std::vector<uint32_t>().swap(s.prims);
+      if (!control.progress) return;
+      const std::lock_guard lock(progress_mu);
+      done += w;
+      control.progress(done, total);
+    };
   });
 
   for (int d = split; d < depth; ++d) {
