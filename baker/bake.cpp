@@ -33,23 +33,28 @@ struct Input {
   std::optional<TreeToEncode> tree;  // pack mode: baked, waiting to be packed
 };
 
-std::string human_rate(double per_second) {
-  char buf[32];
-  if (per_second >= 1e6)
-    std::snprintf(buf, sizeof buf, "%.1fM", per_second / 1e6);
-  else if (per_second >= 1e3)
-    std::snprintf(buf, sizeof buf, "%.1fK", per_second / 1e3);
-  else
-    std::snprintf(buf, sizeof buf, "%.0f", per_second);
-  return buf;
-}
-
 // Collects outcomes from the workers. Error lines go out in input order: the
 // line of input i waits until every earlier input has finished.
 class Reporter {
  public:
-  Reporter(size_t n, std::FILE* err, bool progress)
-      : outcome_(n, Outcome::pending), error_(n), err_(err), progress_(progress), start_(Clock::now()) {
+  Reporter(size_t n, std::FILE* err, bool progress, bool summary)
+      : outcome_(n, Outcome::pending), error_(n), err_(err), progress_(progress), summary_(summary),
+        start_(Clock::now()) {
+    draw_line();
+  }
+
+  // Whether advance() shows anything (the progress line is on).
+  bool live() const { return progress_; }
+
+  // Input i, a mesh of `triangles`, is `fraction` (0..1) built.
+  void advance(size_t i, uint64_t triangles, double fraction) {
+    if (!progress_) return;
+    std::lock_guard lock(mu_);
+    in_flight_[i] = {double(triangles), fraction};
+    // Redraw at most 10 times a second: the line is for a person.
+    const Clock::time_point now = Clock::now();
+    if (now - last_draw_ < std::chrono::milliseconds(100)) return;
+    clear_line();
     draw_line();
   }
 
@@ -58,6 +63,7 @@ class Reporter {
     outcome_[i] = outcome;
     error_[i] = std::move(error);
     triangles_ += triangles;
+    in_flight_.erase(i);
     ++done_;
     clear_line();
     for (; emitted_ < outcome_.size() && outcome_[emitted_] != Outcome::pending; ++emitted_)
@@ -90,16 +96,20 @@ class Reporter {
     s.failed += extra_failures_;
     s.triangles = triangles_;
     s.errors = lines_;
-    if (progress_) {
-      clear_line();
-      const double secs = std::chrono::duration<double>(Clock::now() - start_).count();
-      std::fprintf(err_, "octbake: %d baked, %d up to date, %d failed in %.2f s (%s tri/s)\n", s.baked,
-                   s.up_to_date, s.failed, secs, human_rate(secs > 0 ? triangles_ / secs : 0).c_str());
-    }
+    clear_line();
+    if (summary_)
+      std::fprintf(err_, "%s\n", summary_line(s.baked, s.up_to_date, s.failed, seconds(), triangles_).c_str());
+    std::fflush(err_);
     return s;
   }
 
  private:
+  struct Partial {
+    double triangles, fraction;
+  };
+
+  double seconds() const { return std::chrono::duration<double>(Clock::now() - start_).count(); }
+
   void print_error(const std::string& line) {
     lines_.push_back(line);
     std::fprintf(err_, "%s\n", line.c_str());
@@ -110,19 +120,30 @@ class Reporter {
   }
   void draw_line() {
     if (!progress_) return;
-    const double secs = std::chrono::duration<double>(Clock::now() - start_).count();
-    std::fprintf(err_, "baking %zu/%zu files, %s tri/s", done_, outcome_.size(),
-                 human_rate(secs > 0 ? triangles_ / secs : 0).c_str());
+    ProgressCounts c;
+    c.files_done = done_;
+    c.files_total = outcome_.size();
+    c.files_waiting = outcome_.size() - done_ - in_flight_.size();
+    c.triangles_done = c.triangles_known = double(triangles_);
+    for (const auto& [i, p] : in_flight_) {
+      c.triangles_done += p.triangles * p.fraction;
+      c.triangles_known += p.triangles;
+      c.files_writing += p.fraction >= 1;
+    }
+    c.seconds = seconds();
+    std::fputs(progress_line(c).c_str(), err_);
     std::fflush(err_);
+    last_draw_ = Clock::now();
   }
 
   std::mutex mu_;
   std::vector<Outcome> outcome_;
   std::vector<std::string> error_;
   std::vector<std::string> lines_;
+  std::map<size_t, Partial> in_flight_;  // inputs being built, by index
   std::FILE* err_;
-  bool progress_;
-  Clock::time_point start_;
+  bool progress_, summary_;
+  Clock::time_point start_, last_draw_;
   size_t done_ = 0, emitted_ = 0;
   int extra_failures_ = 0;
   uint64_t triangles_ = 0;
@@ -132,18 +153,26 @@ std::string error_line(const std::string& path, const std::string& reason) {
   return "octbake: error: " + path + ": " + reason;
 }
 
-// Runs fn(i) for every i in [0, n) on up to `jobs` threads. Which thread runs
-// which item never shows in the output: results are keyed by index.
+// Runs fn(i) for every i in [0, n) on the calling thread and as many more as
+// `budget` has slots, each holding one slot while it works. A thread that
+// finds no item left gives its slot back at once, for a build still running
+// (build_tree takes idle slots). Which thread runs which item never shows in
+// the output: results are keyed by index.
 template <class Fn>
-void parallel_for(size_t n, int jobs, const Fn& fn) {
+void parallel_for(size_t n, ThreadBudget& budget, const Fn& fn) {
   std::atomic<size_t> next{0};
   auto worker = [&] {
     for (size_t i; (i = next.fetch_add(1)) < n;) fn(i);
   };
-  const size_t threads = std::min(n, static_cast<size_t>(std::max(jobs, 1)));
+  const bool held = budget.try_acquire();  // the calling thread's own slot
   std::vector<std::jthread> pool;
-  for (size_t t = 1; t < threads; ++t) pool.emplace_back(worker);
+  for (size_t t = 1; t < n && budget.try_acquire(); ++t)
+    pool.emplace_back([&] {
+      worker();
+      budget.release();
+    });
   worker();
+  if (held) budget.release();
 }
 
 // The masks of every tree of `path` when it holds exactly `expect` (names and
@@ -169,21 +198,25 @@ std::optional<std::vector<OctreeMasks>> load_if_current(const std::string& path,
   return masks;
 }
 
-// Imports and builds one input's tree through the public API (baker.h);
-// the error is the reason only. `files_read` as load_mesh.
-Result<TreeToEncode> bake_tree(const Input& in, const BakeOptions& options,
-                               std::vector<std::string>* files_read = nullptr) {
+// Imports input i (public API: load_mesh, recording the files read) and
+// builds its tree on threads from `threads`, showing its progress on
+// `reporter`; the error is the reason only.
+Result<TreeToEncode> bake_tree(const Input& in, size_t i, const BakeOptions& options, ThreadBudget& threads,
+                               Reporter& reporter, std::vector<std::string>* files_read) {
   auto mesh = load_mesh(in.path, files_read);
   if (!mesh) return Error{mesh.error().code, error_reason(mesh.error(), in.path)};
-  auto masks = bake_masks(*mesh, options);
-  if (!masks) return masks.error();
+  BuildControl control{&threads, {}};
+  if (reporter.live())
+    control.progress = [&reporter, i, triangles = mesh->triangles.size()](uint64_t done, uint64_t total) {
+      reporter.advance(i, triangles, total > 0 ? double(done) / double(total) : 1.0);
+    };
   TreeToEncode t;
   t.name = in.name;
   t.source_hash = in.hash;
   t.options = options;
   t.triangle_count = mesh->triangles.size();
   t.vertex_count = mesh->positions.size();
-  t.masks = std::move(*masks);
+  t.masks = build_tree(*mesh, options.depth, options.occupancy, control);
   return t;
 }
 
@@ -214,16 +247,16 @@ std::optional<std::string> make_dir(const std::string& dir) {
 
 class Baker {
  public:
-  Baker(const BakeConfig& config, std::FILE* err) : config_(config), err_(err) {}
+  Baker(const BakeConfig& config, std::FILE* err) : config_(config), err_(err), threads_(std::max(config.jobs, 1)) {}
 
   BakeSummary run() {
     collect_inputs();
-    Reporter reporter(inputs_.size(), err_, config_.progress);
+    Reporter reporter(inputs_.size(), err_, config_.progress, config_.summary);
     reporter_ = &reporter;
     find_collisions();
     prepare_dirs();
     if (config_.pack.empty())
-      parallel_for(inputs_.size(), config_.jobs, [&](size_t i) { guarded(i, [&] { bake_one(i); }); });
+      parallel_for(inputs_.size(), threads_, [&](size_t i) { guarded(i, [&] { bake_one(i); }); });
     else
       bake_pack();
     return reporter.summary();
@@ -326,7 +359,7 @@ class Baker {
       }
     }
     std::vector<std::string> files_read;
-    auto tree = bake_tree(in, config_.options, &files_read);
+    auto tree = bake_tree(in, i, config_.options, threads_, *reporter_, &files_read);
     if (!tree) return fail(i, tree.error().message);
     const std::vector<uint8_t> bytes = encode_file({&*tree, 1}, baker_version());
     auto written = write_file_atomic(in.output, bytes);
@@ -348,7 +381,7 @@ class Baker {
   // trees, else bake in parallel and encode once, in input order.
   void bake_pack() {
     std::vector<uint8_t> hashed(inputs_.size(), 0);
-    parallel_for(inputs_.size(), config_.jobs, [&](size_t i) { guarded(i, [&] { hashed[i] = hash_input(i); }); });
+    parallel_for(inputs_.size(), threads_, [&](size_t i) { guarded(i, [&] { hashed[i] = hash_input(i); }); });
     std::vector<const Input*> expect;
     for (size_t i = 0; i < inputs_.size(); ++i)
       if (hashed[i]) expect.push_back(&inputs_[i]);
@@ -368,9 +401,9 @@ class Baker {
       }
     }
 
-    parallel_for(inputs_.size(), config_.jobs, [&](size_t i) {
+    parallel_for(inputs_.size(), threads_, [&](size_t i) {
       guarded(i, [&] {
-        auto tree = bake_tree(inputs_[i], config_.options);
+        auto tree = bake_tree(inputs_[i], i, config_.options, threads_, *reporter_);
         if (!tree) return fail(i, tree.error().message);
         const std::string problem = export_tree(tree->masks, inputs_[i].name);
         if (!problem.empty()) return fail(i, problem);
@@ -391,6 +424,7 @@ class Baker {
 
   const BakeConfig& config_;
   std::FILE* err_;
+  ThreadBudget threads_;  // -j: shared by the files and the builds within them
   std::vector<Input> inputs_;
   Reporter* reporter_ = nullptr;
 };

@@ -17,10 +17,12 @@ struct BakeConfig {
   std::string out_dir = "baked";   // one DIR/<stem>.oct per input
   std::string pack;                // non-empty: all trees in this one file instead
   BakeOptions options;
-  int jobs = 1;                    // >= 1 worker threads
+  int jobs = 1;                    // >= 1 threads in all: files in parallel, and the
+                                   // octants of a file on threads no file needs
   bool force = false;              // rebake even when up to date
   std::string export_obj_dir;      // non-empty: also DIR/<stem>_d<depth>.obj
-  bool progress = false;           // updating line and summary on the error stream
+  bool progress = false;           // updating progress line on the error stream (a terminal)
+  bool summary = false;            // one summary line on the error stream at the end
   std::string depfile;             // non-empty (one input, no pack): write "OUTPUT: FILES READ" here
 };
 

@@ -2,9 +2,14 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cassert>
 #include <cmath>
+#include <exception>
 #include <limits>
+#include <mutex>
+#include <system_error>
+#include <thread>
 
 #include "occupancy.h"
 
@@ -41,6 +46,18 @@ struct Interior {
   bool contains(int d, BoxCoord c) const { return any[d][grid_index(d, c)] != 0; }
 };
 
+// A subtree still to build: occupied box `coord` of the split depth, the
+// primitives that touch it (in the order its parent handed them down) and
+// whether it is wholly interior (solid).
+struct Subtree {
+  BoxCoord coord;
+  bool full = false;
+  std::vector<uint32_t> prims;
+};
+
+// Builds the masks of the levels between a root box and `depth`. With
+// `frontier` set it stops at depth `stop` and hands the occupied boxes there
+// back as subtrees instead of descending into them.
 class TreeBuilder {
  public:
   TreeBuilder(const std::vector<Prim>& prims, const Aabb& bounds, int depth, double pad, const Interior* interior)
@@ -48,12 +65,27 @@ class TreeBuilder {
     for (int d = 0; d <= depth; ++d) size_[d] = (bounds.max - bounds.min) / double(uint64_t{1} << d);
   }
 
-  OctreeMasks run() {
+  // masks[d] for d < stop of the whole tree; the boxes of depth `stop`, in
+  // Morton order, go to `frontier`.
+  std::vector<std::vector<uint8_t>> top(int stop, std::vector<Subtree>& frontier) {
+    stop_ = stop;
+    frontier_ = &frontier;
     masks_.assign(depth_, {});
     work_.resize(prims_.size());
     for (size_t i = 0; i < prims_.size(); ++i) work_[i] = static_cast<uint32_t>(i);
     visit(0, BoxCoord{}, 0, work_.size(), false);
-    return OctreeMasks{bounds_, std::move(masks_)};
+    return std::move(masks_);
+  }
+
+  // masks[d] for d >= root_depth of the subtree under box `root` of depth
+  // root_depth (the levels above stay empty).
+  std::vector<std::vector<uint8_t>> subtree(int root_depth, const Subtree& root) {
+    stop_ = depth_;
+    frontier_ = nullptr;
+    masks_.assign(depth_, {});
+    work_ = root.prims;
+    visit(root_depth, root.coord, 0, work_.size(), root.full);
+    return std::move(masks_);
   }
 
  private:
@@ -68,6 +100,10 @@ class TreeBuilder {
   // Depth-first in octant order appends each depth's masks in Morton order.
   void visit(int d, BoxCoord c, size_t begin, size_t end, bool full) {
     if (d == depth_) return;
+    if (frontier_ != nullptr && d == stop_) {
+      frontier_->push_back({c, full, {work_.begin() + begin, work_.begin() + end}});
+      return;
+    }
     const int cd = d + 1;
     const bool last = cd == depth_;
     std::array<BoxCoord, 8> cc;
@@ -131,6 +167,8 @@ class TreeBuilder {
   int depth_;
   double pad_;
   const Interior* interior_;
+  int stop_ = 0;
+  std::vector<Subtree>* frontier_ = nullptr;
   std::array<Eigen::Vector3d, 13> size_;
   std::vector<std::vector<uint8_t>> masks_;
   std::vector<uint32_t> work_;  // stacked primitive lists, one segment per open box
@@ -194,6 +232,111 @@ Interior fill_interior(const OctreeMasks& surface) {
   return in;
 }
 
+// Runs every item i in [0, n) on the calling thread plus helpers that take
+// free slots from `budget` (null: none): each thread makes its own worker,
+// `make_worker()`, and calls worker(i) for the items it takes. Slots are
+// looked for before each item, so threads another job gives back join a
+// build in progress. The first exception thrown by any worker stops the rest
+// and is rethrown here, after every helper has finished.
+template <class MakeWorker>
+void run_tasks(size_t n, ThreadBudget* budget, const MakeWorker& make_worker) {
+  std::atomic<size_t> next{0};
+  std::mutex mu;
+  std::exception_ptr failure;
+  auto fail = [&] {
+    const std::lock_guard lock(mu);
+    if (!failure) failure = std::current_exception();
+    next.store(n);
+  };
+  auto helper = [&] {
+    try {
+      auto worker = make_worker();
+      for (size_t i; (i = next.fetch_add(1)) < n;) worker(i);
+    } catch (...) {
+      fail();
+    }
+    budget->release();
+  };
+  {
+    std::vector<std::jthread> helpers;  // joined before `failure` is read
+    bool spawning = budget != nullptr;
+    try {
+      auto worker = make_worker();
+      for (size_t i; (i = next.fetch_add(1)) < n;) {
+        // A helper only when an item is left besides the one this thread takes.
+        while (spawning && next.load() < n && budget->try_acquire()) {
+          try {
+            helpers.emplace_back(helper);
+          } catch (const std::system_error&) {  // no thread to be had: go on with those running
+            budget->release();
+            spawning = false;
+          }
+        }
+        worker(i);
+      }
+    } catch (...) {
+      fail();
+    }
+  }
+  if (failure) std::rethrow_exception(failure);
+}
+
+// Split depth: the top levels are built on the calling thread, the subtrees
+// below in parallel. Depth 3 gives up to 512 subtrees, enough to balance a
+// few threads, while the serial top stays a few percent of a deep build.
+constexpr int kSplitDepth = 3;
+
+// build_tree's core for one depth: the top levels serially, then every
+// occupied box of the split depth as its own task, largest first; each
+// level's masks are the subtrees' masks concatenated in Morton order, so the
+// result does not depend on threads or scheduling.
+OctreeMasks build_split(const std::vector<Prim>& prims, const Aabb& bounds, int depth, double pad,
+                        const Interior* interior, const BuildControl& control) {
+  const int split = std::min(depth - 1, kSplitDepth);
+  std::vector<Subtree> subtrees;
+  std::vector<std::vector<uint8_t>> masks = TreeBuilder(prims, bounds, depth, pad, interior).top(split, subtrees);
+
+  // Progress in primitive references at the split depth: a subtree's share of
+  // the work grows with the primitives handed to it (+1: every part counts).
+  auto weight = [](const Subtree& s) { return uint64_t{s.prims.size()} + 1; };
+  uint64_t total = 0;
+  for (const Subtree& s : subtrees) total += weight(s);
+  std::mutex progress_mu;
+  uint64_t done = 0;
+  if (control.progress) control.progress(0, total);
+
+  // Largest first, so the last tasks running are short ones.
+  std::vector<uint32_t> order(subtrees.size());
+  for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](uint32_t a, uint32_t b) { return subtrees[a].prims.size() > subtrees[b].prims.size(); });
+  std::vector<std::vector<std::vector<uint8_t>>> parts(subtrees.size());
+  // One builder per thread, so its scratch lists are reused from task to task.
+  run_tasks(order.size(), control.threads, [&] {
+    return [&, builder = TreeBuilder(prims, bounds, depth, pad, interior)](size_t k) mutable {
+      Subtree& s = subtrees[order[k]];
+      parts[order[k]] = builder.subtree(split, s);
+      const uint64_t w = weight(s);
+      std::vector<uint32_t>().swap(s.prims);
+      if (!control.progress) return;
+      const std::lock_guard lock(progress_mu);
+      done += w;
+      control.progress(done, total);
+    };
+  });
+
+  for (int d = split; d < depth; ++d) {
+    size_t size = 0;
+    for (const auto& part : parts) size += part[d].size();
+    masks[d].reserve(size);
+    for (auto& part : parts) {
+      masks[d].insert(masks[d].end(), part[d].begin(), part[d].end());
+      std::vector<uint8_t>().swap(part[d]);  // keep the peak near one copy of the tree
+    }
+  }
+  return OctreeMasks{bounds, std::move(masks)};
+}
+
 }  // namespace
 
 double occupancy_pad(const Aabb& bounds) {
@@ -204,7 +347,7 @@ double occupancy_pad(const Aabb& bounds) {
   return kRelative * extent + kUlps * magnitude + std::numeric_limits<double>::min();
 }
 
-OctreeMasks build_tree(const Mesh& mesh, int depth, Occupancy mode) {
+OctreeMasks build_tree(const Mesh& mesh, int depth, Occupancy mode, const BuildControl& control) {
   assert(depth >= 1 && depth <= 12);
   assert(!mesh.positions.empty());
   Aabb bounds{mesh.positions.front(), mesh.positions.front()};
@@ -223,10 +366,12 @@ OctreeMasks build_tree(const Mesh& mesh, int depth, Occupancy mode) {
     for (const auto& t : mesh.triangles) prims.push_back(make_prim(mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]]));
   }
 
-  if (mode != Occupancy::solid) return TreeBuilder(prims, bounds, depth, pad, nullptr).run();
+  if (mode != Occupancy::solid) return build_split(prims, bounds, depth, pad, nullptr, control);
+  // The fill grid is a cheap first pass; only the full-depth build reports progress.
   const int fill_depth = std::min(depth, kSolidFillDepth);
-  const Interior interior = fill_interior(TreeBuilder(prims, bounds, fill_depth, pad, nullptr).run());
-  return TreeBuilder(prims, bounds, depth, pad, &interior).run();
+  const Interior interior =
+      fill_interior(build_split(prims, bounds, fill_depth, pad, nullptr, {control.threads, {}}));
+  return build_split(prims, bounds, depth, pad, &interior, control);
 }
 
 }  // namespace octbake

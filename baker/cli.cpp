@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdarg>
+#include <nlohmann/json.hpp>
 
 #include "octbake/baked_file.h"
 
@@ -54,6 +55,46 @@ std::string describe(const BakedFile& file, const std::string& path) {
   return s;
 }
 
+// The same facts as describe(), as JSON (documented at print_info).
+nlohmann::ordered_json describe_json(const BakedFile& file, const std::string& path) {
+  using nlohmann::ordered_json;
+  auto vec = [](const Eigen::Vector3d& v) { return ordered_json::array({v.x(), v.y(), v.z()}); };
+  ordered_json trees = ordered_json::array();
+  for (const TreeInfo& t : file.trees()) {
+    const Eigen::Vector3d ext = t.bounds.max - t.bounds.min;
+    ordered_json levels = ordered_json::array();
+    uint64_t stored = 0, raw = 0;
+    for (int d = 0; d <= t.depth; ++d) {
+      const double cells = std::ldexp(1.0, d);
+      levels.push_back({{"depth", d},
+                        {"boxes", t.box_count[d]},
+                        {"stored_bytes", t.stored_bytes[d]},
+                        {"raw_bytes", t.raw_bytes[d]},
+                        {"leaf_size", vec(ext / cells)}});
+      stored += t.stored_bytes[d];
+      raw += t.raw_bytes[d];
+    }
+    trees.push_back({{"name", t.name},
+                     {"source_hash", t.source_hash},
+                     {"depth", t.depth},
+                     {"triangles", t.triangle_count},
+                     {"vertices", t.vertex_count},
+                     {"options",
+                      {{"depth", t.options.depth},
+                       {"occupancy", to_string(t.options.occupancy)},
+                       {"compression", compression_name(t.options.compression)},
+                       {"compression_level", t.options.compression_level}}},
+                     {"bounds", {{"min", vec(t.bounds.min)}, {"max", vec(t.bounds.max)}}},
+                     {"levels", std::move(levels)},
+                     {"stored_bytes", stored},
+                     {"raw_bytes", raw}});
+  }
+  return {{"path", path},
+          {"format_version", file.format_version()},
+          {"baker_version", file.baker_version()},
+          {"trees", std::move(trees)}};
+}
+
 }  // namespace
 
 std::string error_reason(const Error& e, const std::string& path) {
@@ -81,8 +122,9 @@ std::optional<Occupancy> parse_occupancy(const std::string& text) {
   return std::nullopt;
 }
 
-int print_info(const std::vector<std::string>& files, std::FILE* out, std::FILE* err) {
+int print_info(const std::vector<std::string>& files, std::FILE* out, std::FILE* err, bool json) {
   int status = 0;
+  nlohmann::ordered_json described = nlohmann::ordered_json::array();
   for (const std::string& path : files) {
     auto file = BakedFile::open(path);
     // Decode every level too, so a file --info accepts is one the runtime loads.
@@ -95,10 +137,64 @@ int print_info(const std::vector<std::string>& files, std::FILE* out, std::FILE*
       status = 1;
       continue;
     }
-    std::fputs(describe(*file, path).c_str(), out);
+    if (json)
+      described.push_back(describe_json(*file, path));
+    else
+      std::fputs(describe(*file, path).c_str(), out);
+  }
+  if (json) {
+    // Replace, not throw, should a name hold bytes that are not UTF-8.
+    const std::string text = nlohmann::ordered_json{{"files", std::move(described)}}.dump(
+        2, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
+    std::fprintf(out, "%s\n", text.c_str());
   }
   std::fflush(out);
   return status;
+}
+
+std::string human_count(double n) {
+  char buf[32];
+  if (n >= 1e6)
+    std::snprintf(buf, sizeof buf, "%.1fM", n / 1e6);
+  else if (n >= 1e4)
+    std::snprintf(buf, sizeof buf, "%.1fK", n / 1e3);
+  else
+    std::snprintf(buf, sizeof buf, "%.0f", n);
+  return buf;
+}
+
+std::string human_duration(double seconds) {
+  const uint64_t s = seconds > 0 && std::isfinite(seconds) ? static_cast<uint64_t>(std::min(seconds, 1e9)) : 0;
+  char buf[48];
+  if (s < 60)
+    std::snprintf(buf, sizeof buf, "%llu s", static_cast<unsigned long long>(s));
+  else if (s < 3600)
+    std::snprintf(buf, sizeof buf, "%llu min %02llu s", static_cast<unsigned long long>(s / 60),
+                  static_cast<unsigned long long>(s % 60));
+  else
+    std::snprintf(buf, sizeof buf, "%llu h %02llu min", static_cast<unsigned long long>(s / 3600),
+                  static_cast<unsigned long long>(s / 60 % 60));
+  return buf;
+}
+
+std::string progress_line(const ProgressCounts& c) {
+  std::string s;
+  appendf(s, "baking %zu/%zu files, %s/%s tri", c.files_done, c.files_total, human_count(c.triangles_done).c_str(),
+          human_count(c.triangles_known).c_str());
+  if (c.seconds <= 0 || c.triangles_done <= 0) return s;
+  const double rate = c.triangles_done / c.seconds;
+  appendf(s, ", %s tri/s", human_count(rate).c_str());
+  const double left = c.triangles_known - c.triangles_done;
+  if (c.files_waiting == 0 && left > 0) s += ", ETA " + human_duration(left / rate);
+  if (c.files_writing > 0) appendf(s, ", writing %zu", c.files_writing);
+  return s;
+}
+
+std::string summary_line(int baked, int up_to_date, int failed, double seconds, uint64_t triangles) {
+  std::string s;
+  appendf(s, "octbake: %d baked, %d up to date, %d failed in %.2f s (%s tri/s)", baked, up_to_date, failed, seconds,
+          human_count(seconds > 0 ? double(triangles) / seconds : 0).c_str());
+  return s;
 }
 
 }  // namespace octbake

@@ -21,7 +21,7 @@ int main(int argc, char** argv) {
   config.jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   std::vector<std::string> info_files;
   std::string occupancy = "surface", compress = "zstd:19";
-  bool quiet = false;
+  bool quiet = false, json = false;
 
   app.add_option("FILE", config.inputs, "Mesh files to bake");
   auto* out = app.add_option("-o,--out", config.out_dir, "One baked file per input: DIR/<stem>.oct")
@@ -38,11 +38,13 @@ int main(int argc, char** argv) {
           [](std::string& v) { return parse_compression(v) ? std::string() : "expected zstd[:1..22] or none, got " + v; },
           "zstd[:LEVEL]|none"))
       ->capture_default_str();
-  app.add_option("-j,--jobs", config.jobs, "Files baked in parallel (default: all cores)")->check(CLI::Range(1, 4096));
+  app.add_option("-j,--jobs", config.jobs,
+                 "Threads: files baked in parallel, a large file's octants on the idle ones (default: all cores)")->check(CLI::Range(1, 4096));
   app.add_flag("--force", config.force, "Rebake even when the output is up to date");
-  app.add_option("--info", info_files, "Print what baked files hold and exit");
+  auto* info = app.add_option("--info", info_files, "Print what baked files hold and exit");
+  app.add_flag("--json", json, "With --info: one JSON document on stdout instead of text")->needs(info);
   app.add_option("--export-obj", config.export_obj_dir, "Also write each tree's boxes per depth as DIR/<stem>_d<depth>.obj");
-  app.add_flag("-q,--quiet", quiet, "No progress display");
+  app.add_flag("-q,--quiet", quiet, "No progress display and no summary line");
   std::string for_scene;
   app.add_option("--for-scene", for_scene, "Bake only the FILEs whose model SCENE.json names, each to the depth its run needs");
   app.add_option("--depfile", config.depfile, "Also write FILE: a Make rule OUTPUT: every file the import read (one input; implies --force)");
@@ -62,7 +64,7 @@ int main(int argc, char** argv) {
 
   if (!info_files.empty()) {
     info_files.insert(info_files.end(), config.inputs.begin(), config.inputs.end());
-    return print_info(info_files, stdout, stderr);
+    return print_info(info_files, stdout, stderr, json);
   }
   if (config.inputs.empty()) {
     std::fputs("octbake: error: no input files (see octbake --help)\n", stderr);
@@ -77,6 +79,7 @@ int main(int argc, char** argv) {
   std::tie(config.options.compression, config.options.compression_level) = *parse_compression(compress);
   config.progress = !quiet && ::isatty(STDERR_FILENO);
   if (!for_scene.empty()) return bake_for_scene(for_scene, config, stderr);
+  config.summary = !quiet;
   const BakeSummary summary = run_bake(config, stderr);
   return summary.failed == 0 ? 0 : 1;
 }
