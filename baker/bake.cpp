@@ -12,6 +12,7 @@
 #include <thread>
 #include <utility>
 
+#include "build_tree.h"
 #include "cli.h"
 #include "octbake/baked_file.h"
 #include "octbake/baker.h"
@@ -403,7 +404,7 @@ class Baker {
 
     parallel_for(inputs_.size(), threads_, [&](size_t i) {
       guarded(i, [&] {
-        auto tree = bake_tree(inputs_[i], i, config_.options, threads_, *reporter_);
+        auto tree = bake_tree(inputs_[i], i, config_.options, threads_, *reporter_, nullptr);
         if (!tree) return fail(i, tree.error().message);
         const std::string problem = export_tree(tree->masks, inputs_[i].name);
         if (!problem.empty()) return fail(i, problem);

@@ -43,10 +43,16 @@ install(FILES ${CMAKE_CURRENT_BINARY_DIR}/octbakeConfig.cmake ${CMAKE_CURRENT_BI
   ${octbake_cmake_modules} DESTINATION ${OCTBAKE_CMAKE_INSTALL_DIR} COMPONENT runtime)
 
 # pkg-config: `pkg-config --cflags --libs octbake`.
+# A static runtime is the only artefact, so zstd goes on the plain Libs line
+# (most users never pass --static); a shared one links zstd itself.
 if(BUILD_SHARED_LIBS)
   set(OCTBAKE_PC_CFLAGS "")
+  set(OCTBAKE_PC_LIBS "-loctbake_runtime")
+  set(OCTBAKE_PC_LIBS_PRIVATE "-lzstd")
 else()
   set(OCTBAKE_PC_CFLAGS "-DOCTBAKE_STATIC_DEFINE")
+  set(OCTBAKE_PC_LIBS "-loctbake_runtime -lzstd")
+  set(OCTBAKE_PC_LIBS_PRIVATE "")
 endif()
 file(RELATIVE_PATH OCTBAKE_PC_TO_PREFIX /${CMAKE_INSTALL_LIBDIR}/pkgconfig /)
 string(REGEX REPLACE "/$" "" OCTBAKE_PC_TO_PREFIX "${OCTBAKE_PC_TO_PREFIX}")

@@ -34,6 +34,7 @@
 #include <set>
 
 #include "bake.h"
+#include "import.h"
 #include "exact.h"
 #include "gen.h"
 #include "octbake/collide.h"
