@@ -117,7 +117,7 @@ std::optional<std::pair<Compression, int>> parse_compression(const std::string& 
 }
 
 std::optional<Occupancy> parse_occupancy(const std::string& text) {
-  for (Occupancy mode : {Occupancy::surface, Occupancy::solid, Occupancy::vertices})
+  for (Occupancy mode : kOccupancies)
     if (text == to_string(mode)) return mode;
   return std::nullopt;
 }

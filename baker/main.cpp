@@ -21,6 +21,8 @@ int main(int argc, char** argv) {
   config.jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   std::vector<std::string> info_files;
   std::string occupancy = "surface", compress = "zstd:19";
+  std::vector<std::string> occupancy_names;
+  for (Occupancy mode : kOccupancies) occupancy_names.push_back(to_string(mode));
   bool quiet = false, json = false;
 
   app.add_option("FILE", config.inputs, "Mesh files to bake");
@@ -31,7 +33,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 12))
       ->capture_default_str();
   app.add_option("--occupancy", occupancy, "surface|solid|vertices")
-      ->check(CLI::IsMember({"surface", "solid", "vertices"}))
+      ->check(CLI::IsMember(occupancy_names))
       ->capture_default_str();
   app.add_option("--compress", compress, "zstd[:LEVEL] (LEVEL 1..22) or none")
       ->check(CLI::Validator(

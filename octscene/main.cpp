@@ -41,14 +41,6 @@ double peak_rss_mb() {
   return static_cast<double>(usage.ru_maxrss) / 1024.0;  // Linux: KiB
 }
 
-const char* policy_name(LodPolicy p) {
-  return p == LodPolicy::fixed ? "fixed" : p == LodPolicy::thesis ? "thesis" : "screen";
-}
-
-const char* response_name(Response r) {
-  return r == Response::none ? "none" : r == Response::thesis ? "thesis" : "separate";
-}
-
 // All cores (hardware_concurrency may say 0: unknown).
 int default_threads() { return std::max(1u, std::thread::hardware_concurrency()); }
 
@@ -59,10 +51,8 @@ struct SceneArgs {
 };
 
 void add_scene_options(CLI::App* cmd, SceneArgs& a) {
-  const std::map<std::string, LodPolicy> policies{
-      {"fixed", LodPolicy::fixed}, {"thesis", LodPolicy::thesis}, {"screen", LodPolicy::screen}};
-  const std::map<std::string, Response> responses{
-      {"none", Response::none}, {"thesis", Response::thesis}, {"separate", Response::separate}};
+  const auto policies = names_of(kLodPolicies);
+  const auto responses = names_of(kResponses);
   cmd->add_option("--lod", a.options.lod.policy, "fixed | thesis | screen (default: screen)")
       ->transform(CLI::CheckedTransformer(policies));
   cmd->add_option("--min-depth", a.options.lod.min_depth, "shallowest depth the LOD picks")
@@ -86,11 +76,11 @@ void add_scene_options(CLI::App* cmd, SceneArgs& a) {
 nlohmann::ordered_json options_json(const SceneArgs& a, const Scene& scene) {
   nlohmann::ordered_json j;
   j["baked"] = scene.baked;
-  j["lod"] = policy_name(a.options.lod.policy);
+  j["lod"] = to_string(a.options.lod.policy);
   j["min_depth"] = a.options.lod.min_depth;
   j["max_depth"] = a.options.lod.max_depth;
   j["pixel_tolerance"] = a.options.lod.pixel_tolerance;
-  j["response"] = response_name(a.options.response);
+  j["response"] = to_string(a.options.response);
   j["frames"] = a.options.frames >= 0 ? a.options.frames : scene.frames;
   j["areas_every_frame"] = a.options.areas_every_frame;
   j["threads"] = a.options.threads;
@@ -285,9 +275,9 @@ nlohmann::ordered_json plan_json(const ModelPlan& m) {
 void print_plan(const std::string& path, const SceneArgs& a, const Loaded& l, const ScenePlan& plan) {
   const LodSettings& lod = a.options.lod;
   std::printf("%s: %zu objects, %lld frames, LOD %s %d..%d", path.c_str(), l.scene.objects.size(),
-              static_cast<long long>(plan.frames), policy_name(lod.policy), lod.min_depth, lod.max_depth);
+              static_cast<long long>(plan.frames), to_string(lod.policy), lod.min_depth, lod.max_depth);
   if (lod.policy == LodPolicy::screen) std::printf(" (%g px)", lod.pixel_tolerance);
-  std::printf(", response %s\n", response_name(a.options.response));
+  std::printf(", response %s\n", to_string(a.options.response));
   std::printf("  %-16s %7s %6s %8s %6s %14s %14s\n", "model", "objects", "baked", "deepest", "needs", "bytes needed",
               "bytes loaded");
   for (const ModelPlan& m : plan.models) {

@@ -248,12 +248,11 @@ int picture_scene(const SceneArgs& a) {
     meshes.push_back(mesh_of_model[m] ? &*mesh_of_model[m] : nullptr);
     trees.push_back(&models->trees[m]);
   }
-  static const char* const kPolicy[] = {"fixed", "thesis", "screen"};
   char title[96];
   int deepest = 0;
   for (const ObjectTree& t : models->trees) deepest = std::max(deepest, t.loaded_depth());
   std::snprintf(title, sizeof title, "frame %lld, LOD %s, depths %d-%d", static_cast<long long>(a.frame),
-                kPolicy[static_cast<int>(a.lod.policy)], a.lod.min_depth, std::min(a.lod.max_depth, deepest));
+                to_string(a.lod.policy), a.lod.min_depth, std::min(a.lod.max_depth, deepest));
   const int width = a.width > 0 ? a.width : std::min(scene->camera.viewport_w, 1280);
   // The frame's camera: the one the LOD saw when it chose these depths.
   Scene at_frame = *scene;
@@ -287,14 +286,12 @@ int picture_main(int argc, char** argv) {
   sc->add_option("--frame", s.frame, "frame to draw (0 .. the scene's frames - 1)")->check(CLI::Range(int64_t{0}, kMaxFrames));
   sc->add_option("--out", s.out, "PNG to write")->required();
   sc->add_option("--meshes", s.meshes, "folder of the source meshes");
-  const std::map<std::string, LodPolicy> policies{
-      {"fixed", LodPolicy::fixed}, {"thesis", LodPolicy::thesis}, {"screen", LodPolicy::screen}};
+  const auto policies = names_of(kLodPolicies);
   sc->add_option("--lod", s.lod.policy, "fixed, thesis or screen")->transform(CLI::CheckedTransformer(policies));
   sc->add_option("--min-depth", s.lod.min_depth)->check(CLI::Range(0, 12));
   sc->add_option("--max-depth", s.lod.max_depth)->check(CLI::Range(0, 12));
   sc->add_option("--pixel-tolerance", s.lod.pixel_tolerance)->check(CLI::PositiveNumber);
-  const std::map<std::string, Response> responses{
-      {"none", Response::none}, {"thesis", Response::thesis}, {"separate", Response::separate}};
+  const auto responses = names_of(kResponses);
   sc->add_option("--response", s.response, "motion up to the frame")->transform(CLI::CheckedTransformer(responses));
   sc->add_option("--width", s.width, "picture width (default: viewport, at most 1280)")->check(CLI::Range(64, 8192));
 

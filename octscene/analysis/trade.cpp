@@ -401,7 +401,7 @@ std::string csv_text(const TradeReport& report) {
   csv << "setting,policy,min_depth,max_depth,pixel_tolerance,frames,true_positives,false_positives,"
          "false_negatives,precision,recall,box_tests_per_frame,ms_per_frame,false_positives_by_depth\n";
   for (const TradeRow& r : report.rows) {
-    const char* policy = r.lod.policy == LodPolicy::fixed ? "fixed" : r.lod.policy == LodPolicy::thesis ? "thesis" : "screen";
+    const char* policy = to_string(r.lod.policy);
     csv << r.label << ',' << policy << ',' << r.lod.min_depth << ',' << r.lod.max_depth << ','
         << r.lod.pixel_tolerance << ',' << report.frames << ',' << r.true_positives << ',' << r.false_positives << ','
         << r.false_negatives << ',' << r.precision() << ',' << r.recall() << ',' << r.box_tests_per_frame << ','

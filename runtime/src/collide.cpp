@@ -4,6 +4,7 @@
 // axis projections of a box pair carried down and updated incrementally.
 // The plain reference descent lives at the end of this file.
 #include "octbake/collide.h"
+#include "octbake/format.h"
 
 #include <algorithm>
 #include <array>
@@ -21,7 +22,6 @@
 namespace octbake {
 namespace {
 
-constexpr int kMaxDepth = 12;  // deepest level a baked file may hold
 // Every box half extent grows by kRelPad times the pair's coordinate magnitude
 // in A's frame (both trees' local coordinates and their offset). Rounding in
 // the relative transform and the SAT sums is ~1e-15 of that magnitude, so this

@@ -1,4 +1,5 @@
 #include "octbake/collision_world.h"
+#include "octbake/format.h"
 
 #include <algorithm>
 #include <atomic>
@@ -26,7 +27,6 @@ namespace {
 // that rounding in the pre-filter never rejects a pair collide() would accept
 // (collide() pads its boxes too). Same rule as the historic World.
 constexpr double kRelativePad = 1e-9;
-constexpr int kMaxTreeDepth = 12;  // collide()'s limit
 constexpr size_t kPairGrain = 64;  // pairs per parallel chunk
 
 std::atomic<uint32_t> g_next_world_id{1};
@@ -259,9 +259,9 @@ const ObjectTree& CollisionWorld::tree_of(const Slot& s) const {
 
 int CollisionWorld::max_depth_of(const Slot& s) const {
 #if OCTBAKE_HAS_LEVEL_CACHE
-  if (s.source.cache) return std::min(s.source.cache->baked_depth(s.source.id), kMaxTreeDepth);
+  if (s.source.cache) return std::min(s.source.cache->baked_depth(s.source.id), kMaxDepth);
 #endif
-  return std::min(s.source.tree->loaded_depth(), kMaxTreeDepth);
+  return std::min(s.source.tree->loaded_depth(), kMaxDepth);
 }
 
 void CollisionWorld::place_box(uint32_t i) {
@@ -639,7 +639,7 @@ Result<std::optional<RayHit>> CollisionWorld::ray_cast(const Eigen::Vector3d& or
     double local_best = limit;
     bool found = false;
     BoxCoord hit_box;
-    Node stack[8 * kMaxTreeDepth + 8];
+    Node stack[8 * kMaxDepth + 8];
     int top = 0;
     stack[top++] = {0, 0, 0, 0, 0};
     while (top > 0) {
@@ -680,7 +680,7 @@ namespace {
 template <class Overlaps>
 bool any_leaf(const ObjectTree& tree, int depth, double pad, const Overlaps& overlaps_box) {
   const Aabb& root = tree.bounds();
-  Node stack[8 * kMaxTreeDepth + 8];
+  Node stack[8 * kMaxDepth + 8];
   int top = 0;
   stack[top++] = {0, 0, 0, 0, 0};
   while (top > 0) {

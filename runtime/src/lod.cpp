@@ -7,6 +7,15 @@
 
 namespace octbake {
 
+const char* to_string(LodPolicy policy) {
+  switch (policy) {
+    case LodPolicy::fixed: return "fixed";
+    case LodPolicy::thesis: return "thesis";
+    case LodPolicy::screen: return "screen";
+  }
+  return "?";
+}
+
 int thesis_depth(double area, double a_min, double a_max, int min_depth, int max_depth) {
   const int lo = std::min(min_depth, max_depth);
   const double sum = a_min + a_max;

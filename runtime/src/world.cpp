@@ -6,6 +6,15 @@
 
 namespace octbake {
 
+const char* to_string(Response response) {
+  switch (response) {
+    case Response::none: return "none";
+    case Response::thesis: return "thesis";
+    case Response::separate: return "separate";
+  }
+  return "?";
+}
+
 namespace {
 
 CollisionSettings collision_settings(const WorldSettings& s, const Camera& camera) {

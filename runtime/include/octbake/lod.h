@@ -31,6 +31,9 @@ struct Camera {
 OCTBAKE_API double pixel_area(const Camera& camera, const OrientedBox& box);
 
 enum class LodPolicy { fixed, thesis, screen };
+inline constexpr LodPolicy kLodPolicies[] = {LodPolicy::fixed, LodPolicy::thesis, LodPolicy::screen};
+// "fixed", "thesis", "screen": the names command lines and JSON use.
+OCTBAKE_API const char* to_string(LodPolicy policy);
 
 struct LodSettings {
   LodPolicy policy = LodPolicy::screen;

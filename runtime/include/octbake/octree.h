@@ -17,6 +17,7 @@ struct Aabb {
 };
 
 enum class Occupancy : uint8_t { surface = 0, solid = 1, vertices = 2 };
+inline constexpr Occupancy kOccupancies[] = {Occupancy::surface, Occupancy::solid, Occupancy::vertices};
 OCTBAKE_API const char* to_string(Occupancy mode);
 
 // Child octant j of a box: x offset = bit 0, y = bit 1, z = bit 2.

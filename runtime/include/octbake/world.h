@@ -20,6 +20,9 @@
 namespace octbake {
 
 enum class Response { none, thesis, separate };
+inline constexpr Response kResponses[] = {Response::none, Response::thesis, Response::separate};
+// "none", "thesis", "separate": the names command lines and JSON use.
+OCTBAKE_API const char* to_string(Response response);
 
 struct ObjectDesc {
   std::string name;
