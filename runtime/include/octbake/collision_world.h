@@ -26,6 +26,7 @@
 // nothing. No call has undefined behaviour on bad input.
 #pragma once
 #include <cstddef>
+#include <cassert>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -261,11 +262,23 @@ class CollisionWorld {
   const WorldTree& world_tree() const { return tree_; }
   const CollisionSettings& settings() const { return settings_; }
   // The world AABB (padded) detect() pre-filters with; as of the last
-  // set_pose. Precondition: alive(h).
-  const Aabb& bounds(ObjectHandle h) const { return boxes_[h.slot]; }
-  // Depth and area as last computed (no refresh). Precondition: alive(h).
-  int cached_depth(ObjectHandle h) const { return slots_[h.slot].depth; }
-  double cached_area(ObjectHandle h) const { return slots_[h.slot].area; }
+  // set_pose. Precondition: alive(h) (asserted; a dead handle gives an empty
+  // box in release builds, never an out-of-range read).
+  const Aabb& bounds(ObjectHandle h) const {
+    static const Aabb kNone{};
+    assert(alive(h));
+    return alive(h) ? boxes_[h.slot] : kNone;
+  }
+  // Depth and area as last computed (no refresh). Precondition: alive(h)
+  // (asserted; 0 in release builds for a dead handle).
+  int cached_depth(ObjectHandle h) const {
+    assert(alive(h));
+    return alive(h) ? slots_[h.slot].depth : 0;
+  }
+  double cached_area(ObjectHandle h) const {
+    assert(alive(h));
+    return alive(h) ? slots_[h.slot].area : 0.0;
+  }
   // The handle living in `slot`, if any.
   std::optional<ObjectHandle> handle_at(uint32_t slot) const;
 
