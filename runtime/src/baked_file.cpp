@@ -163,12 +163,25 @@ struct BakedFile::Impl {
                       std::to_string(kFormatVersion) + "; rebake");
     }
     if (*version == 0) return fail(ErrorCode::corrupt, label, "format version 0");
+    format_version = *version;
+    // The per-version seam: everything above holds for every version (size
+    // prefix, identifier, the version field); what follows is version 1's
+    // layout. A version 2 adds its own read_vN/decode_level_vN pair here and
+    // in decode_level(), and format.cpp's encode_file writes only the newest.
+    switch (format_version) {
+      case 1: return read_v1();
+    }
+    return fail(ErrorCode::unsupported_version, label, "format version " + std::to_string(format_version));
+  }
+
+  // Version 1: the FlatBuffers verifier, then every tree header's counts.
+  std::optional<Error> read_v1() {
+    const size_t size = bytes.size();
     flatbuffers::Verifier verifier(bytes.data(), size);
     if (!fb::VerifySizePrefixedFileBuffer(verifier)) {
       return fail(ErrorCode::corrupt, label, "fails FlatBuffers verification");
     }
     root = fb::GetSizePrefixedFile(bytes.data());
-    format_version = *version;
     baker_version = root->baker_version() ? root->baker_version()->str() : std::string();
     const auto& fb_trees = *root->trees();
     if (fb_trees.size() == 0) return fail(ErrorCode::corrupt, label, "holds no trees");
@@ -187,6 +200,11 @@ struct BakedFile::Impl {
   // Level d (>= 1) of tree t, decoded into exactly raw_size bytes and checked
   // against the box count of depth d.
   Result<std::vector<uint8_t>> decode_level(size_t t, int d) const {
+    // Per-version seam (see verify()): only version 1 exists so far.
+    return decode_level_v1(t, d);
+  }
+
+  Result<std::vector<uint8_t>> decode_level_v1(size_t t, int d) const {
     const TreeInfo& info = trees[t];
     const fb::Level& level = *root->trees()->Get(static_cast<flatbuffers::uoffset_t>(t))->levels()->Get(d);
     const std::string where = tree_label(label, t, info.name) + " level " + std::to_string(d);

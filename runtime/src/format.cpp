@@ -1,4 +1,6 @@
-// encode_file(): TreeToEncode -> the bytes of schema/octbake.fbs.
+// encode_file(): TreeToEncode -> the bytes of schema/octbake.fbs, always the
+// newest format version (kFormatVersion). Its readers, one per version, are
+// beside it in baked_file.cpp (BakedFile::Impl::verify / decode_level).
 #include "octbake/format.h"
 
 #include <zstd.h>
