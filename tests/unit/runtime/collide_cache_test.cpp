@@ -22,17 +22,7 @@ constexpr int kSequences = 120;
 #endif
 
 ObjectTree random_tree(std::mt19937& rng, int depth) {
-  std::vector<std::vector<uint8_t>> masks;
-  uint64_t boxes = 1;
-  for (int d = 0; d < depth; ++d) {
-    std::vector<uint8_t> level(boxes);
-    boxes = 0;
-    for (auto& m : level) {
-      m = uint8_t((rng() | rng()) & 0xFF);
-      boxes += std::popcount(m);
-    }
-    masks.push_back(std::move(level));
-  }
+  std::vector<std::vector<uint8_t>> masks = test::random_masks(rng, depth);
   const Eigen::Vector3d size(0.5 + uniform01(rng), 0.5 + uniform01(rng), 0.5 + uniform01(rng));
   OctreeMasks m{{-0.5 * size, 0.5 * size}, std::move(masks)};
   TreeInfo info;

@@ -28,17 +28,7 @@ constexpr int kRuns = 300;
 // Each child present with probability 3/4 (a box may end up with none); one
 // in eight trees is flat (zero thickness in z).
 ObjectTree random_tree(std::mt19937& rng, int depth) {
-  std::vector<std::vector<uint8_t>> masks;
-  uint64_t boxes = 1;
-  for (int d = 0; d < depth; ++d) {
-    std::vector<uint8_t> level(boxes);
-    boxes = 0;
-    for (auto& m : level) {
-      m = uint8_t((rng() | rng()) & 0xFF);
-      boxes += std::popcount(m);
-    }
-    masks.push_back(std::move(level));
-  }
+  std::vector<std::vector<uint8_t>> masks = test::random_masks(rng, depth);
   Eigen::Vector3d size(0.5 + uniform01(rng), 0.5 + uniform01(rng), 0.5 + uniform01(rng));
   if (rng() % 8 == 0) size.z() = 0;
   const Eigen::Vector3d lo = -0.5 * size + 0.2 * Eigen::Vector3d(uniform01(rng), uniform01(rng), uniform01(rng));
