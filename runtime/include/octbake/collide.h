@@ -102,7 +102,7 @@ OCTBAKE_API PairTest collide(const PlacedTree& a, const PlacedTree& b);
 // box tests added to the one spent). The cache ends up holding the proving
 // leaf pair of a hit, or empty after a miss. The hit is always collide()'s;
 // box_tests and leaf may differ (another overlapping leaf pair may prove it).
-PairTest collide(const PlacedTree& a, const PlacedTree& b, PairCache& cache);
+OCTBAKE_API PairTest collide(const PlacedTree& a, const PlacedTree& b, PairCache& cache);
 
 // Every overlapping leaf pair (no early out), for response and debugging.
 OCTBAKE_API PairTest collide_all(const PlacedTree& a, const PlacedTree& b, std::vector<LeafPair>& out);
@@ -113,13 +113,13 @@ OCTBAKE_API PairTest collide_all(const PlacedTree& a, const PlacedTree& b, std::
 // box pair, same padding. Same hits (and for collide_all_reference the same
 // leaf pairs) as collide / collide_all; box_tests and the proving leaf pair
 // differ. Kept beside the fast path to check it and to measure it against.
-PairTest collide_reference(const PlacedTree& a, const PlacedTree& b);
-PairTest collide_all_reference(const PlacedTree& a, const PlacedTree& b, std::vector<LeafPair>& out);
+OCTBAKE_API PairTest collide_reference(const PlacedTree& a, const PlacedTree& b);
+OCTBAKE_API PairTest collide_all_reference(const PlacedTree& a, const PlacedTree& b, std::vector<LeafPair>& out);
 
 // Tests and benchmarks only: which build of the box-test kernel collide() and
 // collide_all() run, process-wide (best: the widest the CPU has). All builds
 // give identical bits. Returns false, changing nothing, if the CPU lacks it.
 enum class BoxKernel { best, portable, avx2, avx512 };
-bool use_box_kernel(BoxKernel kernel);
+OCTBAKE_API bool use_box_kernel(BoxKernel kernel);
 
 }  // namespace octbake

@@ -33,6 +33,7 @@
 #include <variant>
 #include <vector>
 
+#include "octbake/export.h"
 #include "octbake/collide.h"
 #include "octbake/lod.h"
 #include "octbake/object_tree.h"
@@ -88,7 +89,7 @@ struct RangeTask {
 // (except possibly the last), in any order, on any threads, and return only
 // when all are done. Items are independent and write to separate slots, so
 // results do not depend on how the ranges are split or scheduled.
-class Executor {
+class OCTBAKE_API Executor {
  public:
   virtual ~Executor() = default;
   virtual void parallel_for(size_t count, size_t grain, RangeTask task) = 0;
@@ -97,7 +98,7 @@ class Executor {
 // The built-in executor: `threads - 1` worker threads plus the caller. Used by
 // CollisionWorld when settings.threads > 1 and no executor is given. Workers
 // sleep between jobs; parallel_for does not allocate.
-class ThreadPool final : public Executor {
+class OCTBAKE_API ThreadPool final : public Executor {
  public:
   explicit ThreadPool(int threads);
   ~ThreadPool() override;
@@ -183,7 +184,7 @@ struct RayHit {
   BoxCoord box;         // the leaf box hit, at that depth
 };
 
-class CollisionWorld {
+class OCTBAKE_API CollisionWorld {
  public:
   // settings.world_depth is clamped into 0..10; bounds must have a positive
   // extent on every axis (else it is replaced by the default box).
@@ -345,6 +346,6 @@ class CollisionWorld {
 };
 
 // The SAT estimate between two overlapping oriented boxes (see ContactEstimate).
-ContactEstimate estimate_contact(const OrientedBox& a, const OrientedBox& b);
+OCTBAKE_API ContactEstimate estimate_contact(const OrientedBox& a, const OrientedBox& b);
 
 }  // namespace octbake

@@ -26,6 +26,7 @@
 #include <utility>
 #include <vector>
 
+#include "octbake/export.h"
 #include "octbake/baked_file.h"
 #include "octbake/object_tree.h"
 #include "octbake/result.h"
@@ -42,7 +43,7 @@ struct CacheStats {
   uint64_t budget_clamps = 0;  // require() calls that returned less than asked because of the budget
 };
 
-class LevelCache {
+class OCTBAKE_API LevelCache {
  public:
   explicit LevelCache(uint64_t budget_bytes = UINT64_MAX);
   LevelCache(LevelCache&&) noexcept = default;
