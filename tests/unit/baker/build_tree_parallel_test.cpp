@@ -14,6 +14,7 @@
 
 #include "build_tree.h"
 #include "occupancy.h"
+#include "random_soup.h"
 #include "seeded_random.h"
 
 namespace octbake {
@@ -30,16 +31,7 @@ constexpr int kScale = 1;
 const std::vector<int> kDepths = {1, 2, 3, 4, 6}, kHelpers = {0, 1, 2, 7};
 #endif
 
-Mesh random_soup(std::mt19937& g, int triangles, double size) {
-  Mesh m;
-  for (int i = 0; i < triangles; ++i) {
-    const V a = random_point(g, -1, 1);
-    for (int k = 0; k < 3; ++k) m.positions.push_back(k == 0 ? a : V(a + random_point(g, -size, size)));
-    const uint32_t base = uint32_t(3 * i);
-    m.triangles.push_back({base, base + 1, base + 2});
-  }
-  return m;
-}
+using test::random_soup;
 
 // A closed UV sphere of radius 1 centred at `c`: 2 * segments * (rings - 1) triangles.
 void add_sphere(Mesh& m, const V& c, int rings, int segments) {

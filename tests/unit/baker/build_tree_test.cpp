@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "random_soup.h"
 #include "seeded_random.h"
 
 namespace octbake {
@@ -79,16 +80,7 @@ void expect_nested(const OctreeMasks& t) {
   }
 }
 
-Mesh random_soup(std::mt19937& g, int triangles, double size) {
-  Mesh m;
-  for (int i = 0; i < triangles; ++i) {
-    const V a = random_point(g, -1, 1);
-    for (int k = 0; k < 3; ++k) m.positions.push_back(k == 0 ? a : V(a + random_point(g, -size, size)));
-    const uint32_t base = uint32_t(3 * i);
-    m.triangles.push_back({base, base + 1, base + 2});
-  }
-  return m;
-}
+using test::random_soup;
 
 Mesh cube_mesh() {
   Mesh m;
