@@ -205,15 +205,16 @@ struct TableInput {
   double quarter_a[3], quarter_b[3]; // a quarter of each root's size (local units)
   double half_a[3], half_b[3];       // half of each root's size, B's scaled to A's units
   double pad;
-  int depth_a, depth_b;
 };
 
 struct LaneTables {
   // Offsets of the 8 children at depth 1, octant order: at depth d they are
   // these times 2^(1-d), exactly.
   alignas(64) Lanes offset_a[8], offset_b[8];
-  // Radius of every padded box on every axis, per depth.
-  alignas(64) Lanes radius_a[kMaxDepth + 1], radius_b[kMaxDepth + 1];
+  // Radius of a padded box on every axis at depth d: base * 2^-d + padding
+  // (filled per depth when the descent first reaches it: most pair tests end
+  // after a few depths).
+  alignas(64) Lanes base_a, base_b, padding_a, padding_b;
 };
 
 // Written per chunk of 4 lanes with GCC/Clang vector types, loaded and stored
@@ -249,17 +250,17 @@ using v4d_mem = double __attribute__((vector_size(32), aligned(8), may_alias));
   }
 }
 
-// Radius of the padded box at each depth: weights . (half / 2^d + pad).
-[[gnu::always_inline]] inline void fill_radii(Lanes* radius, const Lanes* weights, const double* half, double pad,
-                                              int depth) {
+// Radius of the padded box at depth d: weights . (half / 2^d + pad), as
+// base * 2^-d + padding.
+[[gnu::always_inline]] inline void fill_radii(double* base_out, double* padding_out, const Lanes* weights,
+                                              const double* half, double pad) {
   for (int c = 0; c < kLanes; c += 4) {
     v4d w0, w1, w2;
     load4(w0, weights[0] + c);
     load4(w1, weights[1] + c);
     load4(w2, weights[2] + c);
-    const v4d base = (w0 * half[0] + w1 * half[1]) + w2 * half[2];
-    const v4d padding = ((w0 + w1) + w2) * pad;
-    for (int d = 0; d <= depth; ++d) store4(radius[d] + c, base * kHalfPow[d] + padding);
+    store4(base_out + c, (w0 * half[0] + w1 * half[1]) + w2 * half[2]);
+    store4(padding_out + c, ((w0 + w1) + w2) * pad);
   }
 }
 
@@ -276,8 +277,8 @@ using v4d_mem = double __attribute__((vector_size(32), aligned(8), may_alias));
   // t = centre B - centre A: A's child moving by +q moves t by -q.
   fill_offsets(out.offset_a, in.w, in.quarter_a, -1.0);
   fill_offsets(out.offset_b, wb, in.quarter_b, 1.0);
-  fill_radii(out.radius_a, in.abs_wa, in.half_a, in.pad, in.depth_a);
-  fill_radii(out.radius_b, in.abs_wb, in.half_b, in.pad, in.depth_b);
+  fill_radii(out.base_a, out.padding_a, in.abs_wa, in.half_a, in.pad);
+  fill_radii(out.base_b, out.padding_b, in.abs_wb, in.half_b, in.pad);
 }
 
 using Builder = void (*)(const TableInput&, LaneTables&);
@@ -382,8 +383,6 @@ class PairFrame {
       in.half_b[i] = 0.5 * rel_.s * b_size_[i];
     }
     in.pad = rel_.pad;
-    in.depth_a = a.depth;
-    in.depth_b = b.depth;
     isa.build(in, t_);
   }
 
@@ -406,7 +405,7 @@ class PairFrame {
 
   bool overlap(const double* p, int da, int db) const {
     bool separated = false;
-    for (int k = 0; k < kLanes; ++k) separated |= std::abs(p[k]) > t_.radius_a[da][k] + t_.radius_b[db][k];
+    for (int k = 0; k < kLanes; ++k) separated |= std::abs(p[k]) > radius_a(da)[k] + radius_b(db)[k];
     return !separated;
   }
 
@@ -414,19 +413,31 @@ class PairFrame {
   // one pad for rounding? Then every leaf under the inner box overlaps the
   // outer box. Checked on the outer box's face axes (lanes 0..2 for A, 3..5
   // for B), where the inner box's radius bounds its extent (|R| padded).
-  bool b_inside_a(const double* p, int da, int db) const { return inside(p, t_.radius_b[db], t_.radius_a[da], 0); }
-  bool a_inside_b(const double* p, int da, int db) const { return inside(p, t_.radius_a[da], t_.radius_b[db], 3); }
+  bool b_inside_a(const double* p, int da, int db) const { return inside(p, radius_b(db), radius_a(da), 0); }
+  bool a_inside_b(const double* p, int da, int db) const { return inside(p, radius_a(da), radius_b(db), 3); }
 
   // Test the children of A's box (split_a) or B's box at depth d against the
   // other box at its depth `other`: see children_overlap.
   uint32_t children_overlap(bool split_a, int d, int other, const double* parent, const uint8_t* octant, int n,
                             Lanes* out) const {
     const double scale = kHalfPow[d];  // children at depth d + 1
-    return split_a ? kernel_(parent, t_.radius_a[d + 1], t_.radius_b[other], t_.offset_a, scale, octant, n, out)
-                   : kernel_(parent, t_.radius_a[other], t_.radius_b[d + 1], t_.offset_b, scale, octant, n, out);
+    return split_a ? kernel_(parent, radius_a(d + 1), radius_b(other), t_.offset_a, scale, octant, n, out)
+                   : kernel_(parent, radius_a(other), radius_b(d + 1), t_.offset_b, scale, octant, n, out);
   }
 
  private:
+  // The 16-lane radii of A's (B's) boxes at depth d, filled on first use.
+  const double* radius_a(int d) const { return radius(d, t_.base_a, t_.padding_a, radius_a_, filled_a_); }
+  const double* radius_b(int d) const { return radius(d, t_.base_b, t_.padding_b, radius_b_, filled_b_); }
+  static const double* radius(int d, const double* base, const double* padding, Lanes* table, uint32_t& filled) {
+    if (!(filled & (1u << d))) {
+      const double h = kHalfPow[d];
+      for (int k = 0; k < kLanes; ++k) table[d][k] = base[k] * h + padding[k];
+      filled |= 1u << d;
+    }
+    return table[d];
+  }
+
   bool inside(const double* p, const double* inner, const double* outer, int lane) const {
     bool in = true;
     for (int k = lane; k < lane + 3; ++k) in &= (std::abs(p[k]) + inner[k]) + rel_.pad <= outer[k];
@@ -440,6 +451,9 @@ class PairFrame {
   Eigen::Vector3d a_min_, b_min_, a_size_, b_size_;  // root sizes
   double size_a_, size_b_;                          // squared root half diagonals, A's units
   LaneTables t_;
+  // Per-depth radii, filled lazily (the frame is used by one descent only).
+  alignas(64) mutable Lanes radius_a_[kMaxDepth + 1], radius_b_[kMaxDepth + 1];
+  mutable uint32_t filled_a_ = 0, filled_b_ = 0;
 };
 
 // A box pair known to overlap, waiting on the descent stack. Its projections

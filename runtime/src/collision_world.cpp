@@ -2,6 +2,7 @@
 #include "octbake/format.h"
 
 #include <algorithm>
+#include <bit>
 #include <atomic>
 #include <cassert>
 #include <cmath>
@@ -66,12 +67,15 @@ int depth_for(const LodSettings& s, double area, double a_min, double a_max, int
 }
 
 // Bitwise equality (0.0 and -0.0 differ): "unchanged" must mean unchanged.
-template <class T>
-bool same_bits(const T& a, const T& b) {
-  if constexpr (std::is_floating_point_v<T>)
-    return std::memcmp(&a, &b, sizeof a) == 0;
-  else
-    return std::memcmp(a.data(), b.data(), sizeof(double) * size_t(a.size())) == 0;
+// Compared as integers, inline (a memcmp of a run-time size was a library
+// call per set_pose).
+bool same_bits(double a, double b) { return std::bit_cast<uint64_t>(a) == std::bit_cast<uint64_t>(b); }
+template <class V>
+bool same_bits(const V& a, const V& b) {
+  static_assert(V::SizeAtCompileTime > 0);
+  bool same = true;
+  for (int k = 0; k < V::SizeAtCompileTime; ++k) same &= same_bits(a[k], b[k]);
+  return same;
 }
 
 double max_abs(const Eigen::Vector3d& v) { return v.cwiseAbs().maxCoeff(); }
@@ -222,6 +226,7 @@ void ThreadPool::parallel_for(size_t count, size_t grain, RangeTask task) {
 
 CollisionWorld::CollisionWorld(CollisionSettings settings)
     : settings_(std::move(settings)),
+      view_(settings_.camera),
       id_(g_next_world_id.fetch_add(1)),
       tree_((settings_.bounds.min.array() < settings_.bounds.max.array()).all() && settings_.bounds.min.allFinite() &&
                     settings_.bounds.max.allFinite()
@@ -365,6 +370,7 @@ void CollisionWorld::invalidate_all_areas() {
 void CollisionWorld::set_camera(const Camera& camera) {
   if (same_camera(camera, settings_.camera)) return;
   settings_.camera = camera;
+  view_ = CameraView(camera);
   invalidate_all_areas();
 }
 
@@ -383,7 +389,7 @@ uint64_t CollisionWorld::refresh_depth(uint32_t i) {
   uint64_t computed = 0;
   // The fixed policy does not look at the area: it is not computed.
   if (settings_.lod.policy != LodPolicy::fixed) {
-    s.area = pixel_area(settings_.camera, place(tree_of(s).bounds(), s.pose));
+    s.area = pixel_area(view_, place(tree_of(s).bounds(), s.pose));
     computed = 1;
   }
   s.depth = depth_for(settings_.lod, s.area, 0, 0, max_depth_of(s));
@@ -398,7 +404,7 @@ uint64_t CollisionWorld::refresh_all_thesis() {
   for (Slot& s : slots_) {
     if (!s.live) continue;
     if (s.area_epoch != epoch_) {
-      s.area = pixel_area(settings_.camera, place(tree_of(s).bounds(), s.pose));
+      s.area = pixel_area(view_, place(tree_of(s).bounds(), s.pose));
       s.area_epoch = epoch_;
       ++computed;
     }
@@ -420,7 +426,7 @@ uint64_t CollisionWorld::refresh_legacy(bool all) {
   for (uint32_t i = 0; i < slots_.size(); ++i) {
     Slot& s = slots_[i];
     if (!s.live || (!all && !cell_changed_[i])) continue;
-    s.area = pixel_area(settings_.camera, place(tree_of(s).bounds(), s.pose));
+    s.area = pixel_area(view_, place(tree_of(s).bounds(), s.pose));
     cell_changed_[i] = 0;
     s.area_epoch = epoch_;  // marks "recomputed now" for the depth pass below
     ++computed;
@@ -453,7 +459,7 @@ Result<double> CollisionWorld::area(ObjectHandle h) {
   if (settings_.area_refresh == AreaRefresh::on_demand) {
     refresh_depth(h.slot);
     if (settings_.lod.policy == LodPolicy::fixed)
-      s.area = pixel_area(settings_.camera, place(tree_of(s).bounds(), s.pose));
+      s.area = pixel_area(view_, place(tree_of(s).bounds(), s.pose));
   }
   return s.area;
 }

@@ -1,12 +1,18 @@
-// Pixel area of a posed box (docs/interface.md section 7): its faces clipped to the
-// view frustum in camera space (Sutherland-Hodgman), projected, then the area
-// of the 2D convex hull (Andrew's monotone chain, shoelace formula).
+// Pixel area of a posed box (docs/interface.md section 7). A box wholly
+// outside one frustum plane is 0 at once. When the whole box is in front of
+// the near plane (nearly always), its 8 corners are projected,
+// their 2D convex hull (Andrew's monotone chain) is clipped to the viewport
+// rectangle and measured (shoelace): the same region as clipping in 3D, since
+// the frustum's side planes project to the rectangle's edges, at a fraction of
+// the cost. Otherwise its faces are clipped to the view frustum in camera
+// space (Sutherland-Hodgman) before projection.
+#include "pixel_area.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <numbers>
-
-#include "octbake/lod.h"
+#include <cstdint>
 
 namespace octbake {
 namespace {
@@ -59,63 +65,85 @@ double hull_area(Vec2* pts, int n) {
   return 0.5 * std::abs(twice);
 }
 
-// Right-handed camera basis (right, up, forward). A look_at equal to the
-// position looks down -z; an up parallel to the view direction is replaced by
-// the world axis least aligned with it.
-Eigen::Matrix3d camera_basis(const Camera& camera) {
-  Vec3 f = camera.look_at - camera.position;
-  f = f.norm() > 0 ? Vec3(f.normalized()) : Vec3(0, 0, -1);
-  Vec3 up = camera.up.norm() > 0 ? Vec3(camera.up.normalized()) : Vec3(0, 1, 0);
-  Vec3 r = f.cross(up);
-  if (r.norm() < 1e-9) {
-    int axis = 0;
-    f.cwiseAbs().minCoeff(&axis);
-    r = f.cross(Vec3::Unit(axis));
-  }
-  r.normalize();
-  Eigen::Matrix3d basis;
-  basis.row(0) = r;
-  basis.row(1) = r.cross(f);
-  basis.row(2) = f;
-  return basis;
+// Polygon area (shoelace) relative to its first vertex: tiny far-away hulls
+// keep their digits.
+double polygon_area(const Vec2* v, int n) {
+  double twice = 0;
+  for (int i = 1; i + 1 < n; ++i) twice += cross(v[0], v[i], v[i + 1]);
+  return 0.5 * std::abs(twice);
 }
 
-}  // namespace
+// Keeps the part of a convex 2D polygon with sign * p[axis] <= limit.
+int clip_2d(const Vec2* in, int n, Vec2* out, int axis, double sign, double limit) {
+  int m = 0;
+  for (int i = 0; i < n; ++i) {
+    const Vec2& p = in[i];
+    const Vec2& q = in[i + 1 == n ? 0 : i + 1];
+    const double dp = limit - sign * p[axis], dq = limit - sign * q[axis];
+    if (dp >= 0) out[m++] = p;
+    if ((dp >= 0) != (dq >= 0)) out[m++] = p + (q - p) * (dp / (dp - dq));
+  }
+  return m;
+}
 
-double pixel_area(const Camera& camera, const OrientedBox& box) {
-  if (camera.viewport_w <= 0 || camera.viewport_h <= 0) return 0;
-  const double w = camera.viewport_w, h = camera.viewport_h, full = w * h;
-
-  // Everything relative to the camera, subtracted first.
-  const Vec3 rel = box.center - camera.position;
-  const Vec3 local = box.axes.transpose() * (-rel);
-  if ((local.cwiseAbs().array() <= box.half.array()).all()) return full;
-
-  const Eigen::Matrix3d basis = camera_basis(camera);
-  const Vec3 center = basis * rel;
-  const Eigen::Matrix3d axes = basis * box.axes * box.half.asDiagonal();  // half-extent vectors
-
-  // fov in (0, 180); a near plane <= 0 becomes a tiny positive one so that
-  // every kept point projects finitely.
-  const double fov = std::clamp(camera.fov_y_deg, 1e-9, 180 - 1e-9) * std::numbers::pi / 180;
-  const double ty = std::tan(0.5 * fov), tx = ty * w / h;
-  const double scale = rel.norm() + box.half.sum();
-  const double near = std::max(camera.near_plane, 1e-12 * scale);
-  const std::array<Eigen::Vector4d, 5> planes = {
-      Eigen::Vector4d(0, 0, 1, -near), Eigen::Vector4d(-1, 0, tx, 0), Eigen::Vector4d(1, 0, tx, 0),
-      Eigen::Vector4d(0, -1, ty, 0), Eigen::Vector4d(0, 1, ty, 0)};
-
+// The box in camera space: corners (right, up, forward) and its near plane.
+struct CameraSpaceBox {
   std::array<Vec3, 8> corner;
-  for (int k = 0; k < 8; ++k)
-    corner[k] = center + axes * Vec3((k & 1) ? 1 : -1, (k & 2) ? 1 : -1, (k & 4) ? 1 : -1);
-  // Corner indices per face, in cyclic order.
-  constexpr int kFaces[6][4] = {{0, 2, 6, 4}, {1, 3, 7, 5}, {0, 1, 5, 4}, {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 5, 7, 6}};
+  Vec3 facing;  // per box axis u: dot(u, centre), centre relative to the camera
+  Vec3 half;
+  double near = 0;
+};
 
+// Corner indices per face, in cyclic order: -x, +x, -y, +y, -z, +z.
+constexpr int kFaces[6][4] = {{0, 2, 6, 4}, {1, 3, 7, 5}, {0, 1, 5, 4}, {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 5, 7, 6}};
+
+// Whole box in front of the near plane: the faces turned towards the camera
+// (at most 3) project onto the outline without overlapping, so its area is
+// the sum of theirs (each a convex quad), clipped to the viewport only when
+// some corner falls outside it. No hull, no sort.
+double projected_area(const CameraView& v, const CameraSpaceBox& b) {
+  std::array<Vec2, 8> pts;
+  const double sx = 0.5 * v.width() / v.tan_x(), sy = 0.5 * v.height() / v.tan_y();
+  const double hw = 0.5 * v.width(), hh = 0.5 * v.height();
+  bool inside = true;
+  for (int k = 0; k < 8; ++k) {
+    const Vec3& p = b.corner[k];
+    const double inv_z = 1 / p.z();
+    pts[k] = Vec2(p.x() * inv_z * sx, p.y() * inv_z * sy);
+    inside &= std::abs(pts[k].x()) <= hw && std::abs(pts[k].y()) <= hh;
+  }
+  double area = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    // Face -axis faces the camera (at the origin) iff the camera lies beyond
+    // it: dot(u, centre) > h; face +axis iff dot(u, centre) < -h.
+    const double s = b.facing[axis];
+    if (!(std::abs(s) > b.half[axis])) continue;  // camera between the two planes: both edge-on or away
+    const int* face = kFaces[2 * axis + (s < 0 ? 1 : 0)];
+    std::array<Vec2, 4 + 4> quad, other;
+    for (int k = 0; k < 4; ++k) quad[k] = pts[face[k]];
+    int n = 4;
+    if (!inside) {
+      n = clip_2d(quad.data(), n, other.data(), 0, +1, hw);
+      n = clip_2d(other.data(), n, quad.data(), 0, -1, hw);
+      n = clip_2d(quad.data(), n, other.data(), 1, +1, hh);
+      n = clip_2d(other.data(), n, quad.data(), 1, -1, hh);
+    }
+    if (n >= 3) area += polygon_area(quad.data(), n);
+  }
+  return area;
+}
+
+// Some corner behind the near plane: clip the faces in 3D first.
+double clipped_area(const CameraView& v, const CameraSpaceBox& b) {
+  const double tx = v.tan_x(), ty = v.tan_y(), w = v.width(), h = v.height();
+  const std::array<Eigen::Vector4d, 5> planes = {
+      Eigen::Vector4d(0, 0, 1, -b.near), Eigen::Vector4d(-1, 0, tx, 0), Eigen::Vector4d(1, 0, tx, 0),
+      Eigen::Vector4d(0, -1, ty, 0), Eigen::Vector4d(0, 1, ty, 0)};
   std::array<Vec2, 6 * kMaxPolygon> pts;
   int n = 0;
   for (const auto& face : kFaces) {
     Polygon poly;
-    for (int k : face) poly.v[poly.n++] = corner[k];
+    for (int k : face) poly.v[poly.n++] = b.corner[k];
     for (const auto& plane : planes) poly = clip(poly, plane);
     for (int i = 0; i < poly.n; ++i) {
       const Vec3& p = poly.v[i];
@@ -126,8 +154,96 @@ double pixel_area(const Camera& camera, const OrientedBox& box) {
       pts[n++] = Vec2(x, y);
     }
   }
-  const double area = hull_area(pts.data(), n);
-  return std::isfinite(area) ? std::clamp(area, 0.0, full) : 0.0;
+  return hull_area(pts.data(), n);
 }
+
+enum class Where { encloses_camera, outside, in_front, straddling };
+
+Where to_camera_space(const CameraView& v, const OrientedBox& box, CameraSpaceBox& b) {
+  const Camera& camera = v.camera();
+  const Vec3 rel = box.center - camera.position;
+  const Vec3 local = box.axes.transpose() * (-rel);
+  if ((local.cwiseAbs().array() <= box.half.array()).all()) return Where::encloses_camera;
+
+  const Eigen::Matrix3d& basis = v.basis();
+  const Vec3 center = basis * rel;
+  const Eigen::Matrix3d axes = basis * box.axes * box.half.asDiagonal();  // half-extent vectors
+  // A near plane <= 0 becomes a tiny positive one so that every kept point
+  // projects finitely.
+  const double scale = rel.norm() + box.half.sum();
+  b.near = std::max(camera.near_plane, 1e-12 * scale);
+  const Vec3 a0 = axes.col(0), a1 = axes.col(1), a2 = axes.col(2);
+  b.facing = -local;
+  b.half = box.half;
+  for (int k = 0; k < 8; ++k)
+    b.corner[k] = center + ((k & 1) ? a0 : Vec3(-a0)) + ((k & 2) ? a1 : Vec3(-a1)) + ((k & 4) ? a2 : Vec3(-a2));
+  // Wholly outside one plane of the frustum: nothing of it is in view.
+  const double tx = v.tan_x(), ty = v.tan_y();
+  uint32_t out_near = 0, out_left = 0, out_right = 0, out_down = 0, out_up = 0;
+  for (int k = 0; k < 8; ++k) {
+    const Vec3& p = b.corner[k];
+    out_near += p.z() - b.near < 0;
+    out_left += tx * p.z() + p.x() < 0;
+    out_right += tx * p.z() - p.x() < 0;
+    out_down += ty * p.z() + p.y() < 0;
+    out_up += ty * p.z() - p.y() < 0;
+  }
+  if (out_near == 8 || out_left == 8 || out_right == 8 || out_down == 8 || out_up == 8) return Where::outside;
+  return out_near == 0 ? Where::in_front : Where::straddling;
+}
+
+double finite_area(double area, double full) { return std::isfinite(area) ? std::clamp(area, 0.0, full) : 0.0; }
+
+}  // namespace
+
+// Right-handed camera basis (right, up, forward). A look_at equal to the
+// position looks down -z; an up parallel to the view direction is replaced by
+// the world axis least aligned with it.
+CameraView::CameraView(const Camera& camera) : camera_(camera) {
+  Vec3 f = camera.look_at - camera.position;
+  f = f.norm() > 0 ? Vec3(f.normalized()) : Vec3(0, 0, -1);
+  Vec3 up = camera.up.norm() > 0 ? Vec3(camera.up.normalized()) : Vec3(0, 1, 0);
+  Vec3 r = f.cross(up);
+  if (r.norm() < 1e-9) {
+    int axis = 0;
+    f.cwiseAbs().minCoeff(&axis);
+    r = f.cross(Vec3::Unit(axis));
+  }
+  r.normalize();
+  basis_.row(0) = r;
+  basis_.row(1) = r.cross(f);
+  basis_.row(2) = f;
+  // fov in (0, 180).
+  const double fov = std::clamp(camera.fov_y_deg, 1e-9, 180 - 1e-9) * std::numbers::pi / 180;
+  width_ = camera.viewport_w, height_ = camera.viewport_h;
+  tan_y_ = std::tan(0.5 * fov);
+  tan_x_ = tan_y_ * width_ / height_;
+}
+
+double pixel_area(const CameraView& view, const OrientedBox& box) {
+  if (view.width() <= 0 || view.height() <= 0) return 0;
+  const double full = view.width() * view.height();
+  CameraSpaceBox b;
+  switch (to_camera_space(view, box, b)) {
+    case Where::encloses_camera: return full;
+    case Where::outside: return 0;
+    case Where::in_front: return finite_area(projected_area(view, b), full);
+    case Where::straddling: return finite_area(clipped_area(view, b), full);
+  }
+  return 0;
+}
+
+double pixel_area(const Camera& camera, const OrientedBox& box) { return pixel_area(CameraView(camera), box); }
+
+namespace detail {
+double pixel_area_clipped(const Camera& camera, const OrientedBox& box) {
+  const CameraView view(camera);
+  if (view.width() <= 0 || view.height() <= 0) return 0;
+  const double full = view.width() * view.height();
+  CameraSpaceBox b;
+  const Where where = to_camera_space(view, box, b);
+  return where == Where::encloses_camera ? full : finite_area(clipped_area(view, b), full);
+}
+}  // namespace detail
 
 }  // namespace octbake

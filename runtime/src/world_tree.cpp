@@ -10,6 +10,7 @@ namespace octbake {
 namespace {
 
 constexpr size_t kCellReserve = 8, kEntryReserve = 8;
+constexpr size_t kRadixFrom = 256;
 
 void insert_sorted(std::vector<uint32_t>& v, uint32_t id) {
   v.insert(std::lower_bound(v.begin(), v.end(), id), id);
@@ -93,9 +94,25 @@ uint32_t WorldTree::cell_slot(const Coord& at) {
   return slot;
 }
 
+void WorldTree::enter_cell(uint32_t slot, uint32_t id) {
+  Cell& cell = cells_[slot];
+  insert_sorted(cell.ids, id);
+  if (cell.ids.size() == 2) {
+    cell.busy_at = uint32_t(busy_.size());
+    busy_.push_back(slot);
+  }
+}
+
 void WorldTree::leave_cell(uint32_t slot, uint32_t id) {
   Cell& cell = cells_[slot];
   erase_sorted(cell.ids, id);
+  if (cell.ids.size() == 1 && cell.busy_at != kNotBusy) {  // no longer busy: swap-remove
+    const uint32_t last = busy_.back();
+    busy_[cell.busy_at] = last;
+    cells_[last].busy_at = cell.busy_at;
+    busy_.pop_back();
+    cell.busy_at = kNotBusy;
+  }
   if (!cell.ids.empty()) return;
   // Free the cell so a long run over a deep world does not accumulate them.
   const size_t mask = table_.size() - 1;
@@ -137,7 +154,7 @@ void WorldTree::relink(uint32_t id, const Coord& lo, const Coord& hi, bool overf
         for (c[0] = lo[0]; c[0] <= hi[0]; ++c[0]) {
           if (was_linked && inside(c, e.lo, e.hi)) continue;  // already there
           const uint32_t slot = cell_slot(c);
-          insert_sorted(cells_[slot].ids, id);
+          enter_cell(slot, id);
           e.cells.push_back(slot);
         }
   }
@@ -203,14 +220,13 @@ void radix_sort(std::vector<std::pair<uint32_t, uint32_t>>& v, std::vector<std::
 
 }  // namespace
 
-// Cells in storage order (most hold one object and are skipped without
-// touching their id list), each pair emitted only by its first common cell,
-// then one radix sort: cheaper than visiting every object's cells in id order.
+// The busy cells, each pair emitted only by its first common cell, then one
+// sort: cheaper than visiting every object's cells in id order.
 void WorldTree::candidate_pairs(std::vector<std::pair<uint32_t, uint32_t>>& out) const {
   out.clear();
-  for (const Cell& cell : cells_) {
+  for (const uint32_t slot : busy_) {
+    const Cell& cell = cells_[slot];
     const std::vector<uint32_t>& ids = cell.ids;
-    if (ids.size() < 2) continue;
     for (size_t i = 0; i + 1 < ids.size(); ++i) {
       const uint32_t a = ids[i];
       const Coord& la = lo_[a];
@@ -230,7 +246,11 @@ void WorldTree::candidate_pairs(std::vector<std::pair<uint32_t, uint32_t>>& out)
       if (b == a || (entries_[b].overflow && b < a)) continue;  // an overflow pair once
       out.emplace_back(std::min(a, b), std::max(a, b));
     }
-  radix_sort(out, sort_scratch_);
+  // The radix sort's fixed cost (8 count tables) only pays off on many pairs.
+  if (out.size() < kRadixFrom)
+    std::sort(out.begin(), out.end());
+  else
+    radix_sort(out, sort_scratch_);
 }
 
 }  // namespace octbake

@@ -311,6 +311,7 @@ class OCTBAKE_API CollisionWorld {
   void test_pairs(size_t begin, size_t end);
 
   CollisionSettings settings_;
+  CameraView view_;  // settings_.camera prepared for pixel_area
   uint32_t id_;
   WorldTree tree_;
   std::vector<Slot> slots_;

@@ -30,6 +30,26 @@ struct Camera {
 // a side <= 0 gives 0.
 OCTBAKE_API double pixel_area(const Camera& camera, const OrientedBox& box);
 
+// A camera prepared for many pixel_area calls: its basis and field-of-view
+// terms are computed once (pixel_area(camera, box) builds one per call).
+// Same results as pixel_area(camera, box), bit for bit.
+class OCTBAKE_API CameraView {
+ public:
+  explicit CameraView(const Camera& camera);
+  const Camera& camera() const { return camera_; }
+  const Eigen::Matrix3d& basis() const { return basis_; }  // rows: right, up, forward
+  double tan_x() const { return tan_x_; }                  // tan of half the horizontal fov
+  double tan_y() const { return tan_y_; }
+  double width() const { return width_; }
+  double height() const { return height_; }
+
+ private:
+  Camera camera_;
+  Eigen::Matrix3d basis_;
+  double tan_x_ = 0, tan_y_ = 0, width_ = 0, height_ = 0;
+};
+OCTBAKE_API double pixel_area(const CameraView& view, const OrientedBox& box);
+
 enum class LodPolicy { fixed, thesis, screen };
 inline constexpr LodPolicy kLodPolicies[] = {LodPolicy::fixed, LodPolicy::thesis, LodPolicy::screen};
 // "fixed", "thesis", "screen": the names command lines and JSON use.

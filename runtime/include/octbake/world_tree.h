@@ -18,9 +18,10 @@
 // Pairs are reported without duplicates and without a dedup pass: a pair is
 // emitted only by its *first common cell*, the cell (max of both objects' min
 // cell, per axis), which both objects hold whenever they share any cell.
-// Cells are scanned in storage order (one-object cells cost one size check),
-// then the pairs are radix sorted. Cost: the sum over cells of occupants^2,
-// i.e. the true candidate set, plus |overflow| * |objects|, all linear.
+// Only cells holding two or more objects are scanned (a list kept as objects
+// enter and leave cells), then the pairs are sorted. Cost: the sum over busy
+// cells of occupants^2, i.e. the true candidate set, plus |overflow| *
+// |objects|, all linear; no pass over the world's single-object cells.
 #pragma once
 #include <array>
 #include <cstdint>
@@ -70,13 +71,16 @@ class OCTBAKE_API WorldTree {
   };
   struct Cell {
     Coord at{};
-    std::vector<uint32_t> ids;  // sorted ascending
+    uint32_t busy_at = kNotBusy;  // index in busy_ while the cell holds 2+ objects
+    std::vector<uint32_t> ids;    // sorted ascending
   };
+  static constexpr uint32_t kNotBusy = UINT32_MAX;
 
   Coord cell_of(const Eigen::Vector3d& p) const;
   // Moves `id` from the cells of entries_[id]'s range to those of [lo, hi],
   // touching only the cells that differ.
   void relink(uint32_t id, const Coord& lo, const Coord& hi, bool overflow);
+  void enter_cell(uint32_t slot, uint32_t id);
   void leave_cell(uint32_t slot, uint32_t id);
   uint32_t cell_slot(const Coord& at);  // finds or creates
   size_t table_find(uint32_t key) const;
@@ -91,6 +95,9 @@ class OCTBAKE_API WorldTree {
   std::vector<Coord> lo_;       // hot copy of entries_[id].lo for the pair loop
   std::vector<Cell> cells_;
   std::vector<uint32_t> free_cells_;  // emptied slots, reused LIFO
+  // Slots of the cells holding two or more objects, in no particular order:
+  // the pair scan visits only these (most cells of a sparse world hold one).
+  std::vector<uint32_t> busy_;
   // Cell coordinate -> slot: open addressing with linear probing and
   // backward-shift deletion (no tombstones, no allocation per insert; the
   // node-based std::unordered_map was 15% of a frame). Entries are

@@ -7,6 +7,7 @@
 #include <random>
 
 #include "octbake/lod.h"
+#include "pixel_area.h"
 
 #include "seeded_random.h"
 
@@ -182,6 +183,36 @@ TEST(PixelArea, ExtremeCamerasStayFiniteAndSane) {
           EXPECT_GT(area, 0.0);
         }
       }
+}
+
+// The fast path (project the corners, clip the hull in 2D) against clipping
+// every face in 3D, over boxes in view, partly in view, far, tiny, huge and at
+// 1e7 offsets: the same area to rounding.
+TEST(PixelArea, ProjectedHullEqualsFrustumClipping) {
+  std::mt19937 rng(77);
+  int partial = 0, inside = 0, cases = 0;
+  for (int run = 0; run < 20000; ++run) {
+    const double offset = run % 5 == 0 ? 1e7 : 0, size = std::pow(10.0, -3 + 6 * uniform01(rng));
+    Camera cam;
+    cam.position = Eigen::Vector3d::Constant(offset) + random_vector(rng, 10 * size);
+    cam.look_at = Eigen::Vector3d::Constant(offset) + random_vector(rng, size);
+    cam.up = random_vector(rng, 1);
+    cam.fov_y_deg = 10 + 150 * uniform01(rng);
+    cam.viewport_w = 1 + int(rng() % 4000);
+    cam.viewport_h = 1 + int(rng() % 3000);
+    cam.near_plane = run % 3 == 0 ? 0 : 1e-3 * size;
+    const OrientedBox box = make_box(Eigen::Vector3d::Constant(offset) + random_vector(rng, 3 * size),
+                                     size * Eigen::Vector3d(0.01 + uniform01(rng), 0.01 + uniform01(rng), 1e-4 + uniform01(rng)),
+                                     random_rotation(rng));
+    const double fast = pixel_area(cam, box), clipped = detail::pixel_area_clipped(cam, box);
+    const double full = double(cam.viewport_w) * cam.viewport_h;
+    ASSERT_NEAR(fast, clipped, 1e-9 * full + 1e-6) << "run " << run;
+    ++cases;
+    partial += fast > 0 && fast < 0.5 * full;
+    inside += fast == full;
+  }
+  EXPECT_GT(partial, cases / 10);
+  EXPECT_GT(inside, 0);
 }
 
 TEST(PixelArea, UpAlongTheViewDirectionStillWorks) {
