@@ -508,11 +508,8 @@ DetectStats CollisionWorld::detect(std::vector<Contact>& out) {
     stats.area_computations = refresh_legacy(settings_.area_refresh == AreaRefresh::every_frame);
 
   // 3. Candidate pairs, pre-filtered by world AABBs.
-  tree_.candidate_pairs(pairs_);
-  size_t n = 0;
-  for (const auto& p : pairs_)
-    if (overlaps(boxes_[p.first], boxes_[p.second])) pairs_[n++] = p;
-  pairs_.resize(n);
+  tree_.overlapping_pairs(boxes_, pairs_);
+  const size_t n = pairs_.size();
   stats.candidate_pairs = stats.pair_tests = n;
 
   // 4. Depths of the objects in pairs.

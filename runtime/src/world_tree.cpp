@@ -1,6 +1,7 @@
 #include "octbake/world_tree.h"
 
 #include <algorithm>
+#include <bit>
 #include <cassert>
 #include <cmath>
 #include <utility>
@@ -49,6 +50,11 @@ uint32_t pack(const std::array<uint16_t, 3>& c) { return uint32_t(c[0]) | (uint3
 // Fibonacci hashing of the packed coordinate into the table.
 size_t home(uint32_t key, size_t mask) { return size_t((key * 0x9E3779B97F4A7C15ull) >> 32) & mask; }
 
+// Element-wise: operator== on the arrays was a memcmp call per update.
+bool same(const std::array<uint16_t, 3>& a, const std::array<uint16_t, 3>& b) {
+  return a[0] == b[0] && a[1] == b[1] && a[2] == b[2];
+}
+
 bool inside(const std::array<uint16_t, 3>& c, const std::array<uint16_t, 3>& lo, const std::array<uint16_t, 3>& hi) {
   for (int k = 0; k < 3; ++k)
     if (c[k] < lo[k] || c[k] > hi[k]) return false;
@@ -81,6 +87,7 @@ uint32_t WorldTree::cell_slot(const Coord& at) {
   if (free_cells_.empty()) {
     slot = uint32_t(cells_.size());
     cells_.emplace_back();
+    if (busy_.size() * 64 < cells_.size()) busy_.push_back(0);
     // Cells are reused (LIFO) by whatever moves in next: room for a few
     // occupants up front, so a steady-state frame allocates nothing.
     cells_.back().ids.reserve(kCellReserve);
@@ -97,22 +104,13 @@ uint32_t WorldTree::cell_slot(const Coord& at) {
 void WorldTree::enter_cell(uint32_t slot, uint32_t id) {
   Cell& cell = cells_[slot];
   insert_sorted(cell.ids, id);
-  if (cell.ids.size() == 2) {
-    cell.busy_at = uint32_t(busy_.size());
-    busy_.push_back(slot);
-  }
+  if (cell.ids.size() == 2) busy_[slot / 64] |= uint64_t(1) << (slot % 64);
 }
 
 void WorldTree::leave_cell(uint32_t slot, uint32_t id) {
   Cell& cell = cells_[slot];
   erase_sorted(cell.ids, id);
-  if (cell.ids.size() == 1 && cell.busy_at != kNotBusy) {  // no longer busy: swap-remove
-    const uint32_t last = busy_.back();
-    busy_[cell.busy_at] = last;
-    cells_[last].busy_at = cell.busy_at;
-    busy_.pop_back();
-    cell.busy_at = kNotBusy;
-  }
+  if (cell.ids.size() < 2) busy_[slot / 64] &= ~(uint64_t(1) << (slot % 64));
   if (!cell.ids.empty()) return;
   // Free the cell so a long run over a deep world does not accumulate them.
   const size_t mask = table_.size() - 1;
@@ -178,7 +176,7 @@ bool WorldTree::update(uint32_t id, const Aabb& box) {
 
   const Entry& e = entries_[id];
   if (e.present) {
-    if (e.lo == lo && e.hi == hi && e.overflow == overflow) return false;
+    if (same(e.lo, lo) && same(e.hi, hi) && e.overflow == overflow) return false;
     ++reinsertions_;
   } else {
     insert_sorted(present_ids_, id);
@@ -221,36 +219,53 @@ void radix_sort(std::vector<std::pair<uint32_t, uint32_t>>& v, std::vector<std::
 }  // namespace
 
 // The busy cells, each pair emitted only by its first common cell, then one
-// sort: cheaper than visiting every object's cells in id order.
-void WorldTree::candidate_pairs(std::vector<std::pair<uint32_t, uint32_t>>& out) const {
+// sort: cheaper than visiting every object's cells in id order. `keep`
+// filters pairs before they are stored and sorted.
+template <class Keep>
+void WorldTree::collect_pairs(std::vector<std::pair<uint32_t, uint32_t>>& out, Keep keep) const {
   out.clear();
-  for (const uint32_t slot : busy_) {
-    const Cell& cell = cells_[slot];
-    const std::vector<uint32_t>& ids = cell.ids;
-    for (size_t i = 0; i + 1 < ids.size(); ++i) {
-      const uint32_t a = ids[i];
-      const Coord& la = lo_[a];
-      // The first common cell of a and b is max(la, lb) per axis; since both
-      // are in this cell, it is this cell iff on each axis one of them starts here.
-      const bool ax = cell.at[0] == la[0], ay = cell.at[1] == la[1], az = cell.at[2] == la[2];
-      for (size_t j = i + 1; j < ids.size(); ++j) {
-        const Coord& lb = lo_[ids[j]];
-        if ((ax || cell.at[0] == lb[0]) && (ay || cell.at[1] == lb[1]) && (az || cell.at[2] == lb[2]))
-          out.emplace_back(a, ids[j]);
+  for (size_t word = 0; word < busy_.size(); ++word)
+    for (uint64_t bits = busy_[word]; bits != 0; bits &= bits - 1) {
+      const Cell& cell = cells_[64 * word + size_t(std::countr_zero(bits))];
+      const std::vector<uint32_t>& ids = cell.ids;
+      for (size_t i = 0; i + 1 < ids.size(); ++i) {
+        const uint32_t a = ids[i];
+        const Coord& la = lo_[a];
+        // The first common cell of a and b is max(la, lb) per axis; since both
+        // are in this cell, it is this cell iff on each axis one of them starts here.
+        const bool ax = cell.at[0] == la[0], ay = cell.at[1] == la[1], az = cell.at[2] == la[2];
+        for (size_t j = i + 1; j < ids.size(); ++j) {
+          const uint32_t b = ids[j];
+          const Coord& lb = lo_[b];
+          if ((ax || cell.at[0] == lb[0]) && (ay || cell.at[1] == lb[1]) && (az || cell.at[2] == lb[2]) && keep(a, b))
+            out.emplace_back(a, b);
+        }
       }
     }
-  }
   // Overflow objects are in no cell, so these never repeat a cell pair.
   for (uint32_t a : overflow_ids_)
     for (uint32_t b : present_ids_) {
       if (b == a || (entries_[b].overflow && b < a)) continue;  // an overflow pair once
-      out.emplace_back(std::min(a, b), std::max(a, b));
+      const uint32_t lo = std::min(a, b), hi = std::max(a, b);
+      if (keep(lo, hi)) out.emplace_back(lo, hi);
     }
   // The radix sort's fixed cost (8 count tables) only pays off on many pairs.
   if (out.size() < kRadixFrom)
     std::sort(out.begin(), out.end());
   else
     radix_sort(out, sort_scratch_);
+}
+
+void WorldTree::candidate_pairs(std::vector<std::pair<uint32_t, uint32_t>>& out) const {
+  collect_pairs(out, [](uint32_t, uint32_t) { return true; });
+}
+
+void WorldTree::overlapping_pairs(std::span<const Aabb> boxes, std::vector<std::pair<uint32_t, uint32_t>>& out) const {
+  assert(boxes.size() >= entries_.size());
+  collect_pairs(out, [&](uint32_t a, uint32_t b) {
+    const Aabb &x = boxes[a], &y = boxes[b];
+    return (x.min.array() <= y.max.array()).all() && (y.min.array() <= x.max.array()).all();
+  });
 }
 
 }  // namespace octbake

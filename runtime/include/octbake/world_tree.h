@@ -25,6 +25,7 @@
 #pragma once
 #include <array>
 #include <cstdint>
+#include <span>
 #include <utility>
 #include <vector>
 
@@ -54,6 +55,9 @@ class OCTBAKE_API WorldTree {
   // object. A superset of the pairs whose boxes overlap.
   // `out` is cleared first.
   void candidate_pairs(std::vector<std::pair<uint32_t, uint32_t>>& out) const;
+  // The candidate pairs whose boxes overlap (closed boxes: touching counts),
+  // filtered before sorting. boxes[id] must be the box last given to update(id).
+  void overlapping_pairs(std::span<const Aabb> boxes, std::vector<std::pair<uint32_t, uint32_t>>& out) const;
 
   int depth() const { return depth_; }
   const Aabb& bounds() const { return world_; }
@@ -71,12 +75,12 @@ class OCTBAKE_API WorldTree {
   };
   struct Cell {
     Coord at{};
-    uint32_t busy_at = kNotBusy;  // index in busy_ while the cell holds 2+ objects
-    std::vector<uint32_t> ids;    // sorted ascending
+    std::vector<uint32_t> ids;  // sorted ascending
   };
-  static constexpr uint32_t kNotBusy = UINT32_MAX;
 
   Coord cell_of(const Eigen::Vector3d& p) const;
+  template <class Keep>
+  void collect_pairs(std::vector<std::pair<uint32_t, uint32_t>>& out, Keep keep) const;
   // Moves `id` from the cells of entries_[id]'s range to those of [lo, hi],
   // touching only the cells that differ.
   void relink(uint32_t id, const Coord& lo, const Coord& hi, bool overflow);
@@ -95,9 +99,10 @@ class OCTBAKE_API WorldTree {
   std::vector<Coord> lo_;       // hot copy of entries_[id].lo for the pair loop
   std::vector<Cell> cells_;
   std::vector<uint32_t> free_cells_;  // emptied slots, reused LIFO
-  // Slots of the cells holding two or more objects, in no particular order:
-  // the pair scan visits only these (most cells of a sparse world hold one).
-  std::vector<uint32_t> busy_;
+  // Bit per cell slot: set while the cell holds two or more objects. The pair
+  // scan visits only these, in slot order (most cells of a sparse world hold
+  // one object; a list in arbitrary order made every visit a cache miss).
+  std::vector<uint64_t> busy_;
   // Cell coordinate -> slot: open addressing with linear probing and
   // backward-shift deletion (no tombstones, no allocation per insert; the
   // node-based std::unordered_map was 15% of a frame). Entries are
