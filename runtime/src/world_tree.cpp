@@ -224,9 +224,18 @@ void radix_sort(std::vector<std::pair<uint32_t, uint32_t>>& v, std::vector<std::
 template <class Keep>
 void WorldTree::collect_pairs(std::vector<std::pair<uint32_t, uint32_t>>& out, Keep keep) const {
   out.clear();
-  for (size_t word = 0; word < busy_.size(); ++word)
-    for (uint64_t bits = busy_[word]; bits != 0; bits &= bits - 1) {
-      const Cell& cell = cells_[64 * word + size_t(std::countr_zero(bits))];
+  // The busy cells of one bitmap word at a time, their id lists prefetched a
+  // few cells ahead: each list is its own heap block, a cache miss otherwise.
+  constexpr int kAhead = 4;
+  std::array<uint32_t, 64> slots;
+  for (size_t word = 0; word < busy_.size(); ++word) {
+    int count = 0;
+    for (uint64_t bits = busy_[word]; bits != 0; bits &= bits - 1)
+      slots[count++] = uint32_t(64 * word + size_t(std::countr_zero(bits)));
+    for (int k = 0; k < std::min(count, kAhead); ++k) __builtin_prefetch(cells_[slots[k]].ids.data());
+    for (int k = 0; k < count; ++k) {
+      if (k + kAhead < count) __builtin_prefetch(cells_[slots[k + kAhead]].ids.data());
+      const Cell& cell = cells_[slots[k]];
       const std::vector<uint32_t>& ids = cell.ids;
       for (size_t i = 0; i + 1 < ids.size(); ++i) {
         const uint32_t a = ids[i];
@@ -242,6 +251,7 @@ void WorldTree::collect_pairs(std::vector<std::pair<uint32_t, uint32_t>>& out, K
         }
       }
     }
+  }
   // Overflow objects are in no cell, so these never repeat a cell pair.
   for (uint32_t a : overflow_ids_)
     for (uint32_t b : present_ids_) {
