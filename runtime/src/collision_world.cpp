@@ -43,8 +43,10 @@ Error bad(std::string why) { return Error{ErrorCode::invalid_argument, std::move
 Status check_pose(const Pose& p) {
   if (!p.position.allFinite()) return bad("pose: position is not finite");
   if (!std::isfinite(p.scale) || !(p.scale > 0)) return bad("pose: scale must be finite and > 0");
-  if (!p.rotation.coeffs().allFinite() || !(std::abs(p.rotation.norm() - 1) < 1e-6))
-    return bad("pose: rotation is not a unit quaternion");
+  // |q| within 1e-6 of 1, on the squared norm (no square root per set_pose).
+  constexpr double kLo = (1 - 1e-6) * (1 - 1e-6), kHi = (1 + 1e-6) * (1 + 1e-6);
+  const double n2 = p.rotation.squaredNorm();
+  if (!p.rotation.coeffs().allFinite() || !(n2 > kLo && n2 < kHi)) return bad("pose: rotation is not a unit quaternion");
   return std::monostate{};
 }
 
