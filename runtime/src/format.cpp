@@ -7,8 +7,8 @@
 
 #include <algorithm>
 #include <cassert>
-#include <new>
 #include <memory>
+#include <new>
 #include <set>
 
 #include "octbake_generated.h"
@@ -26,9 +26,9 @@ static_assert(uint8_t(Occupancy::vertices) == uint8_t(fb::Occupancy::Vertices));
 using CCtxPtr = std::unique_ptr<ZSTD_CCtx, decltype(&ZSTD_freeCCtx)>;
 
 // zstd's multithreaded mode (nbWorkers >= 1) writes the same frame for any
-// worker count, given the same job size and overlap (zstd >= 1.4.7; tested by EncodeThreads in
-// tests/unit/baker/cli_jobs_test.cpp), but not the frame of the
-// single-threaded mode: every thread count, 1 included, uses it. zstd
+// worker count, given the same job size and overlap (zstd >= 1.4.7; tested
+// by EncodeThreads in tests/unit/baker/cli_jobs_test.cpp), but not the frame
+// of the single-threaded mode: every thread count, 1 included, uses it. zstd
 // compresses an input of at most kMinJob single-threaded whatever nbWorkers
 // says, so small levels keep the single-threaded frames.
 constexpr size_t kMinJob = size_t(512) << 10;  // ZSTDMT_JOBSIZE_MIN
@@ -43,9 +43,7 @@ constexpr int kOverlapLog = 5;
 // Depends on the level's size only, never on the threads.
 size_t job_size(size_t raw) { return std::clamp((raw + kJobsPerLevel - 1) / kJobsPerLevel, kMinJob, kMaxJob); }
 
-size_t job_count(size_t raw) {
-  return raw <= kMinJob ? 1 : (raw + job_size(raw) - 1) / job_size(raw);
-}
+size_t job_count(size_t raw) { return raw <= kMinJob ? 1 : (raw + job_size(raw) - 1) / job_size(raw); }
 
 // A libzstd built without threads: single-threaded frames for every level,
 // still the same bytes for every thread count.
