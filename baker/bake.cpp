@@ -9,6 +9,7 @@
 #include <map>
 #include <mutex>
 #include <optional>
+#include <span>
 #include <thread>
 #include <utility>
 
@@ -174,6 +175,25 @@ void parallel_for(size_t n, ThreadBudget& budget, const Fn& fn) {
     });
   worker();
   if (held) budget.release();
+}
+
+// encode_file on the calling thread plus free slots of `budget`, as many as
+// the trees' largest level can use, given back at the end. `held`: the
+// calling thread holds a slot already (a parallel_for worker); else it takes
+// one when free, as parallel_for does. The bytes never depend on the count.
+std::vector<uint8_t> encode_with(std::span<const TreeToEncode> trees, ThreadBudget& budget, bool held) {
+  struct Slots {
+    ThreadBudget& budget;
+    int taken = 0;
+    ~Slots() {
+      for (; taken > 0; --taken) budget.release();
+    }
+  } slots{budget};
+  if (!held && budget.try_acquire()) ++slots.taken;
+  int threads = 1;
+  for (const int useful = encode_threads_useful(trees); threads < useful && budget.try_acquire(); ++threads)
+    ++slots.taken;
+  return encode_file(trees, baker_version(), threads);
 }
 
 // The masks of every tree of `path` when it holds exactly `expect` (names and
@@ -362,7 +382,7 @@ class Baker {
     std::vector<std::string> files_read;
     auto tree = bake_tree(in, i, config_.options, threads_, *reporter_, &files_read);
     if (!tree) return fail(i, tree.error().message);
-    const std::vector<uint8_t> bytes = encode_file({&*tree, 1}, baker_version());
+    const std::vector<uint8_t> bytes = encode_with({&*tree, 1}, threads_, /*held=*/true);
     auto written = write_file_atomic(in.output, bytes);
     if (!written) return fail(i, "cannot write " + in.output + ": " + written.error().message);
     if (!config_.depfile.empty()) {
@@ -418,7 +438,7 @@ class Baker {
     for (Input& in : inputs_)
       if (in.tree) trees.push_back(std::move(*in.tree));
     if (trees.empty()) return;  // keep the old pack: nothing to put in it
-    const std::vector<uint8_t> bytes = encode_file(trees, baker_version());
+    const std::vector<uint8_t> bytes = encode_with(trees, threads_, /*held=*/false);
     auto written = write_file_atomic(config_.pack, bytes);
     if (!written) reporter_->extra_error(error_line(config_.pack, "cannot write: " + written.error().message));
   }

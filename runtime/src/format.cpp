@@ -5,8 +5,10 @@
 
 #include <zstd.h>
 
+#include <algorithm>
 #include <cassert>
 #include <memory>
+#include <new>
 #include <set>
 
 #include "octbake_generated.h"
@@ -23,24 +25,62 @@ static_assert(uint8_t(Occupancy::vertices) == uint8_t(fb::Occupancy::Vertices));
 
 using CCtxPtr = std::unique_ptr<ZSTD_CCtx, decltype(&ZSTD_freeCCtx)>;
 
-// One zstd frame with the same bytes on every run: single-threaded, content
-// size and checksum recorded, no dictionary id, nothing time-dependent.
-std::vector<uint8_t> zstd_frame(ZSTD_CCtx* cctx, std::span<const uint8_t> raw, int level) {
+// zstd's multithreaded mode (nbWorkers >= 1) writes the same frame for any
+// worker count, given the same job size and overlap (zstd >= 1.4.7; tested
+// by EncodeThreads in tests/unit/baker/cli_jobs_test.cpp), but not the frame
+// of the single-threaded mode: every thread count, 1 included, uses it. zstd
+// compresses an input of at most kMinJob single-threaded whatever nbWorkers
+// says, so small levels keep the single-threaded frames.
+constexpr size_t kMinJob = size_t(512) << 10;  // ZSTDMT_JOBSIZE_MIN
+constexpr size_t kMaxJob = size_t(4) << 20;
+constexpr size_t kJobsPerLevel = 8;  // enough to balance a few threads
+// Each job is primed with the last 1/16 of a window of the job before it (512
+// KiB at level 19): most of the long matches for a few percent of size.
+// Priming costs about what compressing the same bytes does, so a full-window
+// overlap would double the work.
+constexpr int kOverlapLog = 5;
+
+// Depends on the level's size only, never on the threads.
+size_t job_size(size_t raw) { return std::clamp((raw + kJobsPerLevel - 1) / kJobsPerLevel, kMinJob, kMaxJob); }
+
+size_t job_count(size_t raw) { return raw <= kMinJob ? 1 : (raw + job_size(raw) - 1) / job_size(raw); }
+
+// A libzstd built without threads: single-threaded frames for every level,
+// still the same bytes for every thread count.
+bool zstd_has_threads() {
+  static const bool has = [] {
+    const ZSTD_bounds b = ZSTD_cParam_getBounds(ZSTD_c_nbWorkers);
+    return !ZSTD_isError(b.error) && b.upperBound >= 1;
+  }();
+  return has;
+}
+
+// One zstd frame with the same bytes on every run and for every `threads`:
+// content size and checksum recorded, no dictionary id, nothing
+// time-dependent.
+std::vector<uint8_t> zstd_frame(ZSTD_CCtx* cctx, std::span<const uint8_t> raw, int level, int threads) {
   ZSTD_CCtx_reset(cctx, ZSTD_reset_session_and_parameters);
   ZSTD_CCtx_setParameter(cctx, ZSTD_c_compressionLevel, level);
   ZSTD_CCtx_setParameter(cctx, ZSTD_c_contentSizeFlag, 1);
   ZSTD_CCtx_setParameter(cctx, ZSTD_c_checksumFlag, 1);
   ZSTD_CCtx_setParameter(cctx, ZSTD_c_dictIDFlag, 0);
-  ZSTD_CCtx_setParameter(cctx, ZSTD_c_nbWorkers, 0);
+  if (zstd_has_threads()) {
+    const size_t workers = std::min({size_t(threads), job_count(raw.size()), size_t(256)});
+    ZSTD_CCtx_setParameter(cctx, ZSTD_c_nbWorkers, int(workers));
+    ZSTD_CCtx_setParameter(cctx, ZSTD_c_jobSize, int(job_size(raw.size())));
+    ZSTD_CCtx_setParameter(cctx, ZSTD_c_overlapLog, kOverlapLog);
+  }
   std::vector<uint8_t> frame(ZSTD_compressBound(raw.size()));
   const size_t n = ZSTD_compress2(cctx, frame.data(), frame.size(), raw.data(), raw.size());
-  assert(!ZSTD_isError(n));  // the bound always fits
-  frame.resize(ZSTD_isError(n) ? 0 : n);
+  // The bound always fits: only memory (or a thread) can be missing, and a
+  // raw level instead would make the bytes depend on it.
+  if (ZSTD_isError(n)) throw std::bad_alloc();
+  frame.resize(n);
   return frame;
 }
 
 flatbuffers::Offset<fb::Tree> encode_tree(flatbuffers::FlatBufferBuilder& fbb, ZSTD_CCtx* cctx,
-                                          const TreeToEncode& tree) {
+                                          const TreeToEncode& tree, int threads) {
   const OctreeMasks& masks = tree.masks;
   const int depth = masks.depth();
   assert(depth == tree.options.depth && depth >= 1 && depth <= kMaxDepth);
@@ -57,8 +97,8 @@ flatbuffers::Offset<fb::Tree> encode_tree(flatbuffers::FlatBufferBuilder& fbb, Z
     fb::Compression stored = fb::Compression::None;
     flatbuffers::Offset<flatbuffers::Vector<uint8_t>> data;
     if (tree.options.compression == Compression::zstd) {
-      std::vector<uint8_t> frame = zstd_frame(cctx, raw, tree.options.compression_level);
-      if (!frame.empty() && frame.size() < raw.size()) {
+      std::vector<uint8_t> frame = zstd_frame(cctx, raw, tree.options.compression_level, threads);
+      if (frame.size() < raw.size()) {
         stored = fb::Compression::Zstd;
         data = fbb.CreateVector(frame);
       }
@@ -80,8 +120,11 @@ flatbuffers::Offset<fb::Tree> encode_tree(flatbuffers::FlatBufferBuilder& fbb, Z
 
 }  // namespace
 
-std::vector<uint8_t> encode_file(std::span<const TreeToEncode> trees, const std::string& baker_version) {
+std::vector<uint8_t> encode_file(std::span<const TreeToEncode> trees, const std::string& baker_version,
+                                 int threads) {
   assert(!trees.empty());
+  assert(threads >= 1);
+  threads = std::max(threads, 1);
 #ifndef NDEBUG
   std::set<std::string> names;
   for (const TreeToEncode& t : trees) assert(names.insert(t.name).second && "tree names must be unique");
@@ -91,13 +134,23 @@ std::vector<uint8_t> encode_file(std::span<const TreeToEncode> trees, const std:
   flatbuffers::FlatBufferBuilder fbb(4096);
   fbb.ForceDefaults(true);
   CCtxPtr cctx(ZSTD_createCCtx(), ZSTD_freeCCtx);
+  if (!cctx) throw std::bad_alloc();
   std::vector<flatbuffers::Offset<fb::Tree>> offsets;
   offsets.reserve(trees.size());
-  for (const TreeToEncode& t : trees) offsets.push_back(encode_tree(fbb, cctx.get(), t));
+  for (const TreeToEncode& t : trees) offsets.push_back(encode_tree(fbb, cctx.get(), t, threads));
   const auto trees_offset = fbb.CreateVector(offsets);
   const auto version = fbb.CreateString(baker_version);
   fb::FinishSizePrefixedFileBuffer(fbb, fb::CreateFile(fbb, kFormatVersion, version, trees_offset));
   return {fbb.GetBufferPointer(), fbb.GetBufferPointer() + fbb.GetSize()};
+}
+
+int encode_threads_useful(std::span<const TreeToEncode> trees) {
+  if (!zstd_has_threads()) return 1;
+  size_t most = 1;
+  for (const TreeToEncode& t : trees)
+    if (t.options.compression == Compression::zstd)
+      for (const std::vector<uint8_t>& raw : t.masks.masks) most = std::max(most, job_count(raw.size()));
+  return int(std::min(most, size_t(256)));
 }
 
 }  // namespace octbake

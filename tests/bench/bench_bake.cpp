@@ -2,7 +2,9 @@
 // surface / solid / vertices, on the largest bundled asset and on a generated
 // 100k-triangle torus; and the parallel build of one large mesh (a generated
 // 70k-triangle "scan") at depth 10 and 12 on 1 and 2 threads, with the
-// speed-up. Build with -DOCTBAKE_BENCH=ON -DCMAKE_BUILD_TYPE=Release.
+// speed-up, for the build alone (BM_BakeScanSpeedup) and for the whole bake,
+// build plus encode_file (BM_BakeScanWholeSpeedup: what `octbake -j1` and
+// `-j2` do with one mesh). Build with -DOCTBAKE_BENCH=ON -DCMAKE_BUILD_TYPE=Release.
 //   build/tests/bench_bake --benchmark_filter=BM_BakeScan
 #include <benchmark/benchmark.h>
 #include <time.h>
@@ -13,9 +15,11 @@
 #include <limits>
 #include <numbers>
 #include <string>
+#include <vector>
 
 #include "build_tree.h"
 #include "import.h"
+#include "octbake/format.h"
 
 namespace octbake {
 namespace {
@@ -174,6 +178,47 @@ void BM_BakeScanSpeedup(benchmark::State& state) {
   state.counters["cpu_speedup"] = cpu1 / path2;
 }
 
+// The whole bake of the scan on 1 and 2 threads, as octbake -j1 / -j2 runs
+// it: build_tree on the budget, then encode_file (zstd level 19) on the same
+// threads. Each iteration bakes once on each (alternating which goes first);
+// the counters are the best of each: t1_s, t2_s, speedup (wall), and the
+// encode part alone (enc1_s, enc2_s). Fails when the bytes differ.
+void BM_BakeScanWholeSpeedup(benchmark::State& state) {
+  const Mesh& mesh = scan_70k();
+  const int depth = static_cast<int>(state.range(0));
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  double wall[2] = {kInf, kInf}, encode[2] = {kInf, kInf};
+  size_t bytes_out = 0;
+  bool two_first = false;
+  using Clock = std::chrono::steady_clock;
+  for (auto _ : state) {
+    std::vector<uint8_t> bytes[2];
+    for (int k = 0; k < 2; ++k) {
+      const int threads = (k + two_first) % 2 + 1;
+      ThreadBudget budget(threads - 1);  // the calling thread holds its own slot
+      const auto start = Clock::now();
+      BakeOptions options;
+      options.depth = depth;
+      const TreeToEncode tree{"scan", "", options, mesh.triangles.size(), mesh.positions.size(),
+                              build_tree(mesh, depth, Occupancy::surface, {&budget, {}})};
+      const auto built = Clock::now();
+      bytes[threads - 1] = encode_file({&tree, 1}, "bench", std::min(threads, encode_threads_useful({&tree, 1})));
+      const auto end = Clock::now();
+      wall[threads - 1] = std::min(wall[threads - 1], std::chrono::duration<double>(end - start).count());
+      encode[threads - 1] = std::min(encode[threads - 1], std::chrono::duration<double>(end - built).count());
+    }
+    if (bytes[0] != bytes[1]) state.SkipWithError("1 and 2 threads wrote different bytes");
+    bytes_out = bytes[0].size();
+    two_first = !two_first;
+  }
+  state.counters["t1_s"] = wall[0];
+  state.counters["t2_s"] = wall[1];
+  state.counters["speedup"] = wall[0] / wall[1];
+  state.counters["enc1_s"] = encode[0];
+  state.counters["enc2_s"] = encode[1];
+  state.counters["bytes"] = double(bytes_out);
+}
+
 void BM_BakeElephant(benchmark::State& s) { bake(s, elephant()); }
 void BM_BakeTorus100k(benchmark::State& s) { bake(s, torus_100k()); }
 
@@ -191,6 +236,7 @@ BENCHMARK(BM_BakeScan)
     ->UseRealTime()
     ->Iterations(1);
 BENCHMARK(BM_BakeScanSpeedup)->Arg(10)->Arg(12)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
+BENCHMARK(BM_BakeScanWholeSpeedup)->Arg(10)->Arg(12)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
 
 }  // namespace
 }  // namespace octbake

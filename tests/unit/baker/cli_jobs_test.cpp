@@ -1,5 +1,5 @@
 // The `octbake` binary with a thread budget (-j) shared by files and by the
-// octants of one large mesh; the summary line when stderr is not a terminal;
+// octants of one large mesh; encode_file's bytes for every thread count; the summary line when stderr is not a terminal;
 // the progress line on a terminal (a pseudo-terminal here); --info --json.
 #include <gtest/gtest.h>
 
@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <cstdio>
 #include <optional>
+#include <random>
 
 #include "build_tree.h"
 #include "cli_test_util.h"
@@ -84,6 +85,54 @@ TEST(CliJobs, OneLargeMeshSameBytesForEveryJobCount) {
     EXPECT_EQ(load_tree(t / (mode + kJobs.back() + "/pack.oct"), 1), want);
     EXPECT_GT(want.box_count(kBigDepth), 20000u);  // large enough to split into many octants
     EXPECT_GT(want.box_count(3), 40u);
+  }
+}
+
+// A tree whose deepest level is 2 MiB of masks (every box above it full), in
+// a few patterns: compressible like real masks, and several zstd jobs long.
+TreeToEncode wide_tree() {
+  constexpr int kDepth = 8;
+  constexpr uint8_t kPatterns[] = {0x01, 0x03, 0x0f, 0x33, 0x55, 0xff};
+  std::mt19937 g(8);
+  TreeToEncode t;
+  t.name = "wide";
+  t.source_hash = "00";
+  t.options.depth = kDepth;
+  t.masks.bounds.max = {1, 2, 3};
+  size_t boxes = 1;
+  for (int d = 0; d < kDepth; ++d) {
+    std::vector<uint8_t> level(boxes, 0xff);
+    if (d + 1 == kDepth)
+      for (uint8_t& m : level) m = kPatterns[g() % std::size(kPatterns)];
+    t.masks.masks.push_back(std::move(level));
+    boxes *= 8;
+  }
+  return t;
+}
+
+// Level 5 for every thread count, level 19 (the default, slow) for 1 and 2.
+TEST(EncodeThreads, SameBytesForEveryThreadCount) {
+  TreeToEncode tree = wide_tree();
+  const size_t deepest = tree.masks.masks.back().size();
+  EXPECT_GT(deepest, size_t(512) << 10);  // past zstd's single-threaded limit (ZSTDMT_JOBSIZE_MIN)
+  EXPECT_GE(encode_threads_useful({&tree, 1}), 4);  // split in jobs: the multithreaded path runs
+  for (int level : {5, 19}) {
+    SCOPED_TRACE(level);
+    tree.options.compression_level = level;
+    const std::vector<uint8_t> one = encode_file({&tree, 1}, "v", 1);
+    EXPECT_EQ(encode_file({&tree, 1}, "v", 2), one) << "2 threads";
+    if (level == 19) continue;
+    EXPECT_EQ(encode_file({&tree, 1}, "v"), one) << "the default is one thread";
+    for (int threads : {3, 8}) EXPECT_EQ(encode_file({&tree, 1}, "v", threads), one) << threads << " threads";
+    EXPECT_EQ(encode_file({&tree, 1}, "v", 2), one) << "run to run";
+
+    auto file = BakedFile::from_bytes(one, "mem");
+    ASSERT_TRUE(file.ok()) << file.error().message;
+    const TreeInfo& info = file->trees().at(0);
+    EXPECT_LT(info.stored_bytes.back(), deepest / 2) << "the deepest level is compressed";
+    auto loaded = file->load(0, info.depth);
+    ASSERT_TRUE(loaded.ok()) << loaded.error().message;
+    EXPECT_EQ(loaded->masks(), tree.masks);
   }
 }
 
