@@ -438,7 +438,12 @@ class Baker {
     for (Input& in : inputs_)
       if (in.tree) trees.push_back(std::move(*in.tree));
     if (trees.empty()) return;  // keep the old pack: nothing to put in it
-    const std::vector<uint8_t> bytes = encode_with(trees, threads_, /*held=*/false);
+    std::vector<uint8_t> bytes;
+    try {  // zstd out of memory or threads: one error line, the old pack kept
+      bytes = encode_with(trees, threads_, /*held=*/false);
+    } catch (const std::exception& e) {
+      return reporter_->extra_error(error_line(config_.pack, std::string("internal error: ") + e.what()));
+    }
     auto written = write_file_atomic(config_.pack, bytes);
     if (!written) reporter_->extra_error(error_line(config_.pack, "cannot write: " + written.error().message));
   }
