@@ -308,8 +308,10 @@ WorldTree::RayWalk::RayWalk(const WorldTree& tree, const Eigen::Vector3d& origin
     g0_[k] = (origin[k] - w.min[k]) * inv;
     dg_[k] = dir[k] * inv;
     // Rounding in cell_of, in a slab test against a box near the grid and in
-    // these event times is ~1e-16 of the magnitudes below; 1e-9 is far above.
-    delta_[k] = 1e-9 * ((std::abs(origin[k]) + std::abs(w.min[k]) + std::abs(w.max[k])) * inv + tree.side_ + 1);
+    // these event times is a few 1e-16 of the magnitudes below; 1e-12 is
+    // thousands of times that, and still a sliver of a cell for a ray from
+    // 1e7 away (a wider tube only costs cells, never a miss).
+    delta_[k] = 1e-12 * ((std::abs(origin[k]) + std::abs(w.min[k]) + std::abs(w.max[k])) * inv + tree.side_ + 1);
     step_[k] = dg_[k] > 0 ? 1 : dg_[k] < 0 ? -1 : 0;
     lo_[k] = clamp_cell(g0_[k] - delta_[k], tree.side_);
     hi_[k] = clamp_cell(g0_[k] + delta_[k], tree.side_);

@@ -76,13 +76,14 @@ class OCTBAKE_API WorldTree {
   // [0, t_max] (t_max may be infinite), in order of entry: a 3D DDA
   // (Amanatides & Woo) over the clamped grid, so a ray outside the world box
   // still walks the border cells that reach to infinity. Conservative: it
-  // walks a thin tube around the ray (delta grid units, ~1e-9 of the
-  // coordinates' magnitude, far above rounding), so every cell whose region
+  // walks a thin tube around the ray (delta grid units, 1e-12 of the
+  // coordinates' magnitude in cells, far above rounding), so every cell whose region
   // the ray meets, up to rounding, is reported; entry() is never later than
   // the ray's entry into the tube's part of that cell. Each cell is reported
   // once; an object spanning several cells is reported once per cell (the
   // caller dedups). Overflow objects are in no cell: see overflow_ids().
-  // Holds no allocation; the tree must not change while walking.
+  // origin and dir must be finite. Holds no allocation; the tree must not
+  // change while walking.
   class OCTBAKE_API RayWalk {
    public:
     RayWalk(const WorldTree& tree, const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double t_max);
