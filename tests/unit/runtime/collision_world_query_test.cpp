@@ -244,7 +244,7 @@ TEST(CollisionWorldQuery, WorldTreeRayCastEqualsScanOverEveryObject) {
   std::mt19937 rng(21);
   const std::vector<ObjectTree> trees = test::random_trees(rng, 4);
   uint64_t rays = 0, hits = 0, outside_rays = 0, outside_hits = 0, huge = 0, outside = 0;
-  for (int trial = 0; trial < 2 * kWork; ++trial) {
+  for (int trial = 0; trial < std::max(2 * kWork, 8); ++trial) {
     BigScene s = make_big_scene(rng, trees, 200 + int(below(rng, 1800)));
     huge += s.huge, outside += s.outside;
     for (int r = 0; r < 60; ++r) {
@@ -291,7 +291,7 @@ TEST(CollisionWorldQuery, WorldTreeOverlapsEqualScanOverEveryObject) {
   std::mt19937 rng(22);
   const std::vector<ObjectTree> trees = test::random_trees(rng, 4);
   uint64_t queries = 0, nonempty = 0, found = 0;
-  for (int trial = 0; trial < 2 * kWork; ++trial) {
+  for (int trial = 0; trial < std::max(2 * kWork, 8); ++trial) {
     BigScene s = make_big_scene(rng, trees, 200 + int(below(rng, 1800)));
     for (int q = 0; q < 40; ++q) {
       const Eigen::Vector3d c = s.offset + test::random_point(rng, -250, 250) * s.scale;
