@@ -50,6 +50,13 @@ Status check_pose(const Pose& p) {
   return std::monostate{};
 }
 
+// set_lod's rules, shared with validate().
+Status check_lod(const LodSettings& lod) {
+  if (lod.min_depth < 0 || lod.max_depth < lod.min_depth) return bad("lod: need 0 <= min_depth <= max_depth");
+  if (!(lod.pixel_tolerance > 0)) return bad("lod: pixel_tolerance must be > 0");
+  return std::monostate{};
+}
+
 bool same_camera(const Camera& a, const Camera& b) {
   return a.position == b.position && a.look_at == b.look_at && a.up == b.up && a.fov_y_deg == b.fov_y_deg &&
          a.viewport_w == b.viewport_w && a.viewport_h == b.viewport_h && a.near_plane == b.near_plane &&
@@ -242,6 +249,21 @@ CollisionWorld::CollisionWorld(CollisionSettings settings)
 
 CollisionWorld::~CollisionWorld() = default;
 
+Status CollisionWorld::validate(const CollisionSettings& s) {
+  if (!s.bounds.min.allFinite() || !s.bounds.max.allFinite()) return bad("settings.bounds: not finite");
+  if (!(s.bounds.min.array() < s.bounds.max.array()).all())
+    return bad("settings.bounds: extent not positive on every axis (need min < max)");
+  if (s.world_depth < 0 || s.world_depth > 10) return bad("settings.world_depth: outside 0..10");
+  if (s.threads < 1) return bad("settings.threads: must be >= 1");
+  if (Status st = check_lod(s.lod); !st) return bad("settings." + st.error().message);
+  return std::monostate{};
+}
+
+Result<std::unique_ptr<CollisionWorld>> CollisionWorld::make(CollisionSettings settings) {
+  if (Status st = validate(settings); !st) return st.error();
+  return std::make_unique<CollisionWorld>(std::move(settings));
+}
+
 Status CollisionWorld::check(ObjectHandle h) const {
   if (h.world != id_) return bad("handle: belongs to another CollisionWorld (or was never issued)");
   if (h.slot >= slots_.size() || h.generation == 0) return bad("handle: no such object");
@@ -377,8 +399,7 @@ void CollisionWorld::set_camera(const Camera& camera) {
 }
 
 Status CollisionWorld::set_lod(const LodSettings& lod) {
-  if (lod.min_depth < 0 || lod.max_depth < lod.min_depth) return bad("lod: need 0 <= min_depth <= max_depth");
-  if (!(lod.pixel_tolerance > 0)) return bad("lod: pixel_tolerance must be > 0");
+  if (Status st = check_lod(lod); !st) return st;
   settings_.lod = lod;
   invalidate_all_areas();
   return std::monostate{};
@@ -546,7 +567,13 @@ DetectStats CollisionWorld::detect(std::vector<Contact>& out) {
              slots_[streamed_[e]].source.id == first.source.id;
            ++e)
         deepest = std::max(deepest, slots_[streamed_[e]].depth);
-      (void)first.source.cache->require(first.source.id, deepest);
+      // A failing decode leaves the levels held before it: the objects are
+      // tested at that depth below (still conservative), and the app is told.
+      Result<int> got = first.source.cache->require(first.source.id, deepest);
+      if (!got) {
+        ++stats.stream_errors;
+        last_stream_error_ = got.error();
+      }
       k = e;
     }
     for (uint32_t i : streamed_) {
@@ -613,10 +640,65 @@ struct Node {
 
 }  // namespace
 
-Result<std::optional<RayHit>> CollisionWorld::ray_cast(const Eigen::Vector3d& origin,
-                                                       const Eigen::Vector3d& direction, double max_distance) {
-  if (!origin.allFinite() || !direction.allFinite() || !(max_distance >= 0) || std::isnan(max_distance))
-    return bad("ray_cast: non-finite origin or direction, or max_distance < 0");
+bool CollisionWorld::ray_leaves(uint32_t i, const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double t_box,
+                                double limit, double& local, BoxCoord& hit_box) const {
+  const Slot& s = slots_[i];
+  const ObjectTree& tree = tree_of(s);
+  // Start the local ray where it enters the world box: local coordinates
+  // stay small even for objects 1e7 away.
+  const Eigen::Vector3d start = origin + dir * t_box;
+  const Eigen::Matrix3d rt = s.pose.rotation.toRotationMatrix().transpose();
+  const Eigen::Vector3d o = rt * (start - s.pose.position) / s.pose.scale;
+  const Eigen::Vector3d dl = rt * dir / s.pose.scale;
+  const Aabb& root = tree.bounds();
+  // Rounding of start, of the transform and of the box corners, in local units.
+  const double world_mag = max_abs(origin) + max_abs(s.pose.position) + t_box;
+  const double pad = kRelativePad * (std::max(max_abs(root.min), max_abs(root.max)) + max_abs(o)) +
+                     1e-12 * world_mag / s.pose.scale;
+  double local_best = limit;
+  bool found = false;
+  Node stack[8 * kMaxDepth + 8];
+  int top = 0;
+  stack[top++] = {0, 0, 0, 0, 0};
+  while (top > 0) {
+    const Node nd = stack[--top];
+    const double t = ray_box(o, dl, node_box(root, nd.d, nd.x, nd.y, nd.z, pad), 0, local_best);
+    if (t < 0) continue;
+    if (nd.d == s.depth) {
+      if (!found || t < local_best) {  // ties: the first in octant order
+        local_best = t;
+        hit_box = {nd.x, nd.y, nd.z};
+        found = true;
+      }
+      continue;
+    }
+    const uint8_t m = tree.mask(nd.d, nd.index);
+    uint32_t child = tree.first_child(nd.d, nd.index);
+    // Push in reverse octant order so octant 0 is visited first.
+    Node kids[8];
+    int nk = 0;
+    for (int j = 0; j < 8; ++j)
+      if (m & (1u << j))
+        kids[nk++] = {nd.d + 1, child++, 2 * nd.x + (j & 1), 2 * nd.y + ((j >> 1) & 1), 2 * nd.z + ((j >> 2) & 1)};
+    for (int k = nk - 1; k >= 0; --k) stack[top++] = kids[k];
+  }
+  local = local_best;
+  return found;
+}
+
+namespace {
+
+Error bad_ray() { return bad("ray_cast: non-finite origin or direction, or max_distance < 0"); }
+
+bool bad_ray_input(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double max_distance) {
+  return !origin.allFinite() || !direction.allFinite() || !(max_distance >= 0) || std::isnan(max_distance);
+}
+
+}  // namespace
+
+Result<std::optional<RayHit>> CollisionWorld::ray_cast_scan(const Eigen::Vector3d& origin,
+                                                            const Eigen::Vector3d& direction, double max_distance) {
+  if (bad_ray_input(origin, direction, max_distance)) return bad_ray();
   const double len = direction.norm();
   if (!(len > 0) || !std::isfinite(len)) return bad("ray_cast: zero direction");
   const Eigen::Vector3d dir = direction / len;
@@ -627,54 +709,68 @@ Result<std::optional<RayHit>> CollisionWorld::ray_cast(const Eigen::Vector3d& or
     const double t_box = ray_box(origin, dir, boxes_[i], 0, best_t);
     if (t_box < 0) continue;
     if (settings_.area_refresh == AreaRefresh::on_demand) refresh_depth(i);
-    const Slot& s = slots_[i];
-    const ObjectTree& tree = tree_of(s);
-    // Start the local ray where it enters the world box: local coordinates
-    // stay small even for objects 1e7 away.
-    const Eigen::Vector3d start = origin + dir * t_box;
-    const Eigen::Matrix3d rt = s.pose.rotation.toRotationMatrix().transpose();
-    const Eigen::Vector3d o = rt * (start - s.pose.position) / s.pose.scale;
-    const Eigen::Vector3d dl = rt * dir / s.pose.scale;
-    const Aabb& root = tree.bounds();
-    // Rounding of start, of the transform and of the box corners, in local units.
-    const double world_mag = max_abs(origin) + max_abs(s.pose.position) + t_box;
-    const double pad = kRelativePad * (std::max(max_abs(root.min), max_abs(root.max)) + max_abs(o)) +
-                       1e-12 * world_mag / s.pose.scale;
-    const double limit = best_t - t_box;
-    double local_best = limit;
-    bool found = false;
+    double local;
     BoxCoord hit_box;
-    Node stack[8 * kMaxDepth + 8];
-    int top = 0;
-    stack[top++] = {0, 0, 0, 0, 0};
-    while (top > 0) {
-      const Node nd = stack[--top];
-      const double t = ray_box(o, dl, node_box(root, nd.d, nd.x, nd.y, nd.z, pad), 0, local_best);
-      if (t < 0) continue;
-      if (nd.d == s.depth) {
-        if (!found || t < local_best) {  // ties: the first in octant order
-          local_best = t;
-          hit_box = {nd.x, nd.y, nd.z};
-          found = true;
-        }
-        continue;
-      }
-      const uint8_t m = tree.mask(nd.d, nd.index);
-      uint32_t child = tree.first_child(nd.d, nd.index);
-      // Push in reverse octant order so octant 0 is visited first.
-      Node kids[8];
-      int nk = 0;
-      for (int j = 0; j < 8; ++j)
-        if (m & (1u << j))
-          kids[nk++] = {nd.d + 1, child++, 2 * nd.x + (j & 1), 2 * nd.y + ((j >> 1) & 1), 2 * nd.z + ((j >> 2) & 1)};
-      for (int k = nk - 1; k >= 0; --k) stack[top++] = kids[k];
-    }
-    if (!found) continue;
-    const double t = t_box + local_best;
+    if (!ray_leaves(i, origin, dir, t_box, best_t - t_box, local, hit_box)) continue;
+    const double t = t_box + local;
     if (!best || t < best_t) {
       best_t = t;
-      best = RayHit{{i, s.generation, id_}, t, s.depth, hit_box};
+      best = RayHit{{i, slots_[i].generation, id_}, t, slots_[i].depth, hit_box};
     }
+  }
+  return best;
+}
+
+// The scan's answer (the nearest hit, ties to the smallest slot) in any visit
+// order: the WorldTree's cells along the ray in order of entry, stopping once
+// a cell is entered past the best hit (an object in a later cell only is
+// entered later still, so it cannot win; one found here may be hit beyond
+// this cell, hence no stop at the first hit).
+Result<std::optional<RayHit>> CollisionWorld::ray_cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                                                       double max_distance) {
+  if (bad_ray_input(origin, direction, max_distance)) return bad_ray();
+  const double len = direction.norm();
+  if (!(len > 0) || !std::isfinite(len)) return bad("ray_cast: zero direction");
+  const Eigen::Vector3d dir = direction / len;
+  std::optional<RayHit> best;
+  double best_t = max_distance;
+  const auto consider = [&](uint32_t i) {
+    const double t_box = ray_box(origin, dir, boxes_[i], 0, best_t);
+    if (t_box < 0) return;  // entered after the best hit: cannot win or tie
+    if (settings_.area_refresh == AreaRefresh::on_demand) refresh_depth(i);
+    // Search a little past the best hit (rounding of best_t - t_box), so an
+    // exact tie with a smaller slot is found whatever came first; never past
+    // max_distance, as the scan.
+    double limit = best_t - t_box;
+    if (best) limit = std::min(max_distance - t_box, limit + 8 * std::numeric_limits<double>::epsilon() * best_t);
+    double local;
+    BoxCoord hit_box;
+    if (!ray_leaves(i, origin, dir, t_box, limit, local, hit_box)) return;
+    const double t = t_box + local;
+    if (best && !(t < best_t || (t == best_t && i < best->object.slot))) return;
+    best_t = t;
+    best = RayHit{{i, slots_[i].generation, id_}, t, slots_[i].depth, hit_box};
+  };
+  if (visit_.size() < slots_.size()) visit_.resize(slots_.size(), 0);
+  if (++visit_epoch_ == 0) {  // wrapped: forget every stamp
+    std::fill(visit_.begin(), visit_.end(), 0);
+    visit_epoch_ = 1;
+  }
+  const auto once = [&](uint32_t i) {
+    if (visit_[i] == visit_epoch_) return false;
+    visit_[i] = visit_epoch_;
+    return true;
+  };
+  // Objects moved since the last commit: their tree entries are stale.
+  for (uint32_t i : dirty_)
+    if (slots_[i].live && slots_[i].tree_dirty && once(i)) consider(i);
+  for (uint32_t i : tree_.overflow_ids())
+    if (!slots_[i].tree_dirty && once(i)) consider(i);
+  WorldTree::RayWalk walk(tree_, origin, dir, max_distance);
+  while (walk.next()) {
+    if (walk.entry() > best_t) break;
+    for (uint32_t i : walk.ids())
+      if (!slots_[i].tree_dirty && once(i)) consider(i);
   }
   return best;
 }
@@ -708,54 +804,106 @@ OrientedBox as_oriented(const Aabb& b) {
   return o;
 }
 
+bool bad_box(const Aabb& box) {
+  return !box.min.allFinite() || !box.max.allFinite() || !(box.min.array() <= box.max.array()).all();
+}
+
+bool bad_sphere(const Eigen::Vector3d& center, double radius) {
+  return !center.allFinite() || !std::isfinite(radius) || !(radius >= 0);
+}
+
 }  // namespace
+
+bool CollisionWorld::box_leaves(uint32_t i, const Aabb& box) const {
+  const Slot& s = slots_[i];
+  // The query box in the object's local frame.
+  const Eigen::Matrix3d rt = s.pose.rotation.toRotationMatrix().transpose();
+  OrientedBox q = as_oriented(box);
+  q.center = rt * (q.center - s.pose.position) / s.pose.scale;
+  q.axes = rt;
+  q.half /= s.pose.scale;
+  const Aabb& root = tree_of(s).bounds();
+  const double world_mag = max_abs(box.min) + max_abs(box.max) + max_abs(s.pose.position);
+  const double pad = kRelativePad * (std::max(max_abs(root.min), max_abs(root.max)) + max_abs(q.center) +
+                                     q.half.maxCoeff()) +
+                     1e-12 * world_mag / s.pose.scale;
+  return any_leaf(tree_of(s), s.depth, pad, [&](const Aabb& node) { return sat(as_oriented(node), q).overlap >= 0; });
+}
+
+bool CollisionWorld::sphere_leaves(uint32_t i, const Eigen::Vector3d& center, double radius) const {
+  const Slot& s = slots_[i];
+  const Eigen::Matrix3d rt = s.pose.rotation.toRotationMatrix().transpose();
+  const Eigen::Vector3d c = rt * (center - s.pose.position) / s.pose.scale;
+  const double r = radius / s.pose.scale;
+  const Aabb& root = tree_of(s).bounds();
+  const double world_mag = max_abs(center) + radius + max_abs(s.pose.position);
+  const double pad =
+      kRelativePad * (std::max(max_abs(root.min), max_abs(root.max)) + max_abs(c) + r) + 1e-12 * world_mag / s.pose.scale;
+  return any_leaf(tree_of(s), s.depth, pad, [&](const Aabb& node) {
+    const Eigen::Vector3d closest = c.cwiseMax(node.min).cwiseMin(node.max);
+    return (closest - c).norm() <= r;
+  });
+}
+
+void CollisionWorld::query_candidates(const Aabb& box) {
+  tree_.query_box(box, query_ids_);
+  // Committed objects from the tree; the moved ones by their current box.
+  size_t n = 0;
+  for (uint32_t i : query_ids_)
+    if (!slots_[i].tree_dirty) query_ids_[n++] = i;
+  query_ids_.resize(n);
+  for (uint32_t i : dirty_)
+    if (slots_[i].live && slots_[i].tree_dirty) query_ids_.push_back(i);
+  if (query_ids_.size() > n) {  // dirty_ may name a slot twice
+    std::sort(query_ids_.begin(), query_ids_.end());
+    query_ids_.erase(std::unique(query_ids_.begin(), query_ids_.end()), query_ids_.end());
+  }
+}
 
 Status CollisionWorld::overlap_box(const Aabb& box, std::vector<ObjectHandle>& out) {
   out.clear();
-  if (!box.min.allFinite() || !box.max.allFinite() || !(box.min.array() <= box.max.array()).all())
-    return bad("overlap_box: non-finite box or min > max");
-  for (uint32_t i = 0; i < slots_.size(); ++i) {
-    if (!slots_[i].live || !overlaps(boxes_[i], box)) continue;
+  if (bad_box(box)) return bad("overlap_box: non-finite box or min > max");
+  query_candidates(box);
+  for (uint32_t i : query_ids_) {
+    if (!overlaps(boxes_[i], box)) continue;
     if (settings_.area_refresh == AreaRefresh::on_demand) refresh_depth(i);
-    const Slot& s = slots_[i];
-    // The query box in the object's local frame.
-    const Eigen::Matrix3d rt = s.pose.rotation.toRotationMatrix().transpose();
-    OrientedBox q = as_oriented(box);
-    q.center = rt * (q.center - s.pose.position) / s.pose.scale;
-    q.axes = rt;
-    q.half /= s.pose.scale;
-    const Aabb& root = tree_of(s).bounds();
-    const double world_mag = max_abs(box.min) + max_abs(box.max) + max_abs(s.pose.position);
-    const double pad = kRelativePad * (std::max(max_abs(root.min), max_abs(root.max)) + max_abs(q.center) +
-                                       q.half.maxCoeff()) +
-                       1e-12 * world_mag / s.pose.scale;
-    if (any_leaf(tree_of(s), s.depth, pad, [&](const Aabb& node) { return sat(as_oriented(node), q).overlap >= 0; }))
-      out.push_back({i, s.generation, id_});
+    if (box_leaves(i, box)) out.push_back({i, slots_[i].generation, id_});
   }
   return std::monostate{};
 }
 
 Status CollisionWorld::overlap_sphere(const Eigen::Vector3d& center, double radius, std::vector<ObjectHandle>& out) {
   out.clear();
-  if (!center.allFinite() || !std::isfinite(radius) || !(radius >= 0))
-    return bad("overlap_sphere: non-finite center or radius, or radius < 0");
+  if (bad_sphere(center, radius)) return bad("overlap_sphere: non-finite center or radius, or radius < 0");
+  const Aabb bounds{center.array() - radius, center.array() + radius};
+  query_candidates(bounds);
+  for (uint32_t i : query_ids_) {
+    if (!overlaps(boxes_[i], bounds)) continue;
+    if (settings_.area_refresh == AreaRefresh::on_demand) refresh_depth(i);
+    if (sphere_leaves(i, center, radius)) out.push_back({i, slots_[i].generation, id_});
+  }
+  return std::monostate{};
+}
+
+Status CollisionWorld::overlap_box_scan(const Aabb& box, std::vector<ObjectHandle>& out) {
+  out.clear();
+  if (bad_box(box)) return bad("overlap_box: non-finite box or min > max");
+  for (uint32_t i = 0; i < slots_.size(); ++i) {
+    if (!slots_[i].live || !overlaps(boxes_[i], box)) continue;
+    if (settings_.area_refresh == AreaRefresh::on_demand) refresh_depth(i);
+    if (box_leaves(i, box)) out.push_back({i, slots_[i].generation, id_});
+  }
+  return std::monostate{};
+}
+
+Status CollisionWorld::overlap_sphere_scan(const Eigen::Vector3d& center, double radius, std::vector<ObjectHandle>& out) {
+  out.clear();
+  if (bad_sphere(center, radius)) return bad("overlap_sphere: non-finite center or radius, or radius < 0");
   const Aabb bounds{center.array() - radius, center.array() + radius};
   for (uint32_t i = 0; i < slots_.size(); ++i) {
     if (!slots_[i].live || !overlaps(boxes_[i], bounds)) continue;
     if (settings_.area_refresh == AreaRefresh::on_demand) refresh_depth(i);
-    const Slot& s = slots_[i];
-    const Eigen::Matrix3d rt = s.pose.rotation.toRotationMatrix().transpose();
-    const Eigen::Vector3d c = rt * (center - s.pose.position) / s.pose.scale;
-    const double r = radius / s.pose.scale;
-    const Aabb& root = tree_of(s).bounds();
-    const double world_mag = max_abs(center) + radius + max_abs(s.pose.position);
-    const double pad =
-        kRelativePad * (std::max(max_abs(root.min), max_abs(root.max)) + max_abs(c) + r) + 1e-12 * world_mag / s.pose.scale;
-    if (any_leaf(tree_of(s), s.depth, pad, [&](const Aabb& node) {
-          const Eigen::Vector3d closest = c.cwiseMax(node.min).cwiseMin(node.max);
-          return (closest - c).norm() <= r;
-        }))
-      out.push_back({i, s.generation, id_});
+    if (sphere_leaves(i, center, radius)) out.push_back({i, slots_[i].generation, id_});
   }
   return std::monostate{};
 }

@@ -4,6 +4,7 @@
 #include <bit>
 #include <cassert>
 #include <cmath>
+#include <limits>
 #include <utility>
 
 namespace octbake {
@@ -276,6 +277,149 @@ void WorldTree::overlapping_pairs(std::span<const Aabb> boxes, std::vector<std::
     const Aabb &x = boxes[a], &y = boxes[b];
     return (x.min.array() <= y.max.array()).all() && (y.min.array() <= x.max.array()).all();
   });
+}
+
+// ---- queries ----
+
+void WorldTree::query_box(const Aabb& box, std::vector<uint32_t>& out) const {
+  assert(!box.min.hasNaN() && !box.max.hasNaN());
+  out.clear();
+  const Coord qlo = cell_of(box.min), qhi = cell_of(box.max);
+  // An object meeting the range is taken in its first common cell with it:
+  // max(its lo, qlo) per axis, a cell both hold.
+  const auto take = [&](const Cell& cell) {
+    for (const uint32_t id : cell.ids) {
+      const Coord& lo = entries_[id].lo;
+      bool first = true;
+      for (int k = 0; k < 3; ++k) first &= cell.at[k] == std::max(lo[k], qlo[k]);
+      if (first) out.push_back(id);
+    }
+  };
+  uint64_t range = 1;
+  for (int k = 0; k < 3; ++k) range *= uint64_t(qhi[k]) - qlo[k] + 1;
+  if (table_used_ == 0) {
+    // no cells
+  } else if (range <= table_used_) {  // look up the range's cells
+    Coord c;
+    for (c[2] = qlo[2]; c[2] <= qhi[2]; ++c[2])
+      for (c[1] = qlo[1]; c[1] <= qhi[1]; ++c[1])
+        for (c[0] = qlo[0]; c[0] <= qhi[0]; ++c[0]) {
+          const size_t i = table_find(pack(c));
+          if (table_[i] != 0) take(cells_[uint32_t(table_[i])]);
+        }
+  } else {  // a big range over a sparse world: scan the occupied cells instead
+    for (const Cell& cell : cells_)
+      if (!cell.ids.empty() && inside(cell.at, qlo, qhi)) take(cell);
+  }
+  out.insert(out.end(), overflow_ids_.begin(), overflow_ids_.end());
+  std::sort(out.begin(), out.end());
+}
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// cell_of's clamp for one grid coordinate.
+int clamp_cell(double g, uint32_t side) { return g >= double(side) ? int(side) - 1 : g > 0 ? int(g) : 0; }
+
+}  // namespace
+
+WorldTree::RayWalk::RayWalk(const WorldTree& tree, const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
+                            double t_max)
+    : tree_(&tree), t_max_(t_max) {
+  const Aabb& w = tree.world_;
+  for (int k = 0; k < 3; ++k) {
+    const double inv = tree.inv_cell_[k];
+    g0_[k] = (origin[k] - w.min[k]) * inv;
+    dg_[k] = dir[k] * inv;
+    // Rounding in cell_of, in a slab test against a box near the grid and in
+    // these event times is a few 1e-16 of the magnitudes below; 1e-12 is
+    // thousands of times that, and still a sliver of a cell for a ray from
+    // 1e7 away (a wider tube only costs cells, never a miss).
+    delta_[k] = 1e-12 * ((std::abs(origin[k]) + std::abs(w.min[k]) + std::abs(w.max[k])) * inv + tree.side_ + 1);
+    step_[k] = dg_[k] > 0 ? 1 : dg_[k] < 0 ? -1 : 0;
+    lo_[k] = clamp_cell(g0_[k] - delta_[k], tree.side_);
+    hi_[k] = clamp_cell(g0_[k] + delta_[k], tree.side_);
+    schedule(k);
+  }
+  // The first box: every cell of the tube at t = 0.
+  elo_ = lo_;
+  ehi_ = hi_;
+  cur_ = elo_;
+  enumerating_ = tree.table_used_ > 0;
+}
+
+// Only boundaries 1..side-1 change a clamped cell: past the outer ones the
+// border cells reach to infinity, so an axis with no boundary left never
+// fires again.
+void WorldTree::RayWalk::schedule(int k) {
+  const int side = int(tree_->side_);
+  const double g0 = g0_[k], dg = dg_[k], d = delta_[k];
+  t_lead_[k] = t_trail_[k] = kInf;
+  if (step_[k] > 0) {
+    if (hi_[k] + 1 <= side - 1) t_lead_[k] = std::max(0.0, (hi_[k] + 1 - d - g0) / dg);
+    if (lo_[k] + 1 <= side - 1) t_trail_[k] = std::max(0.0, (lo_[k] + 1 + d - g0) / dg);
+  } else if (step_[k] < 0) {
+    if (lo_[k] >= 1) t_lead_[k] = std::max(0.0, (lo_[k] + d - g0) / dg);
+    if (hi_[k] >= 1) t_trail_[k] = std::max(0.0, (hi_[k] - d - g0) / dg);
+  }
+}
+
+bool WorldTree::RayWalk::next() {
+  for (;;) {
+    // Report the occupied cells of the box being enumerated.
+    while (enumerating_) {
+      const Coord c{uint16_t(cur_[0]), uint16_t(cur_[1]), uint16_t(cur_[2])};
+      // Advance cur_ over [elo_, ehi_], x fastest.
+      int k = 0;
+      for (; k < 3; ++k) {
+        if (cur_[k] < ehi_[k]) {
+          ++cur_[k];
+          break;
+        }
+        cur_[k] = elo_[k];
+      }
+      if (k == 3) enumerating_ = false;
+      const size_t i = tree_->table_find(pack(c));
+      if (tree_->table_[i] != 0) {
+        at_ = c;
+        slot_ = uint32_t(tree_->table_[i]);
+        return true;
+      }
+    }
+    // The next event: the earliest edge crossing, leading edges first on ties
+    // (a larger tube is the conservative side).
+    int axis = -1;
+    bool lead = false;
+    double t = kInf;
+    for (int k = 0; k < 3; ++k)
+      if (t_lead_[k] < t) t = t_lead_[k], axis = k, lead = true;
+    for (int k = 0; k < 3; ++k)
+      if (t_trail_[k] < t) t = t_trail_[k], axis = k, lead = false;
+    if (axis < 0 || !(t <= t_max_) || tree_->table_used_ == 0) return false;
+    if (!lead) {
+      // The trailing edge leaves a cell: the range shrinks. It never passes
+      // the lead (which crosses each boundary first); if rounding ever says
+      // otherwise, keep the cells and wait for the lead.
+      int& edge = step_[axis] > 0 ? lo_[axis] : hi_[axis];
+      if (lo_[axis] < hi_[axis]) {
+        edge += step_[axis];
+        schedule(axis);
+      } else {
+        t_trail_[axis] = kInf;
+      }
+      continue;
+    }
+    // The leading edge enters a new layer of cells: enumerate that slab.
+    const int layer = step_[axis] > 0 ? ++hi_[axis] : --lo_[axis];
+    schedule(axis);
+    entry_ = t;
+    elo_ = lo_;
+    ehi_ = hi_;
+    elo_[axis] = ehi_[axis] = layer;
+    cur_ = elo_;
+    enumerating_ = true;
+  }
 }
 
 }  // namespace octbake

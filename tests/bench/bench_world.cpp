@@ -24,6 +24,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdlib>
+#include <memory>
 #include <new>
 #include <random>
 #include <vector>
@@ -352,6 +353,79 @@ void BM_LegacyStep(benchmark::State& state) {
 }
 BENCHMARK(BM_LegacyStep)->ArgName("objects")->Arg(10'000)->Iterations(kFrames10k)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_LegacyStep)->ArgName("objects")->Arg(100'000)->Iterations(kFrames100k)->Unit(benchmark::kMicrosecond);
+
+// ---- queries: the WorldTree (after) against the scan over every object (before) ----
+
+// The BM_Detect world after one detect() (the WorldTree holds every object,
+// depths from the screen policy), and 256 fixed queries inside it: rays from
+// random points in random directions (nearest hit, unbounded), and boxes two
+// lattice spacings wide. Arg "scan": 1 = ray_cast_scan / overlap_box_scan.
+struct QueryWorld {
+  Scene scene;
+  std::unique_ptr<CollisionWorld> world;
+  std::vector<Eigen::Vector3d> origins, dirs;
+  std::vector<Aabb> boxes;
+  explicit QueryWorld(int n) : scene(make_scene(n)) {
+    world = std::make_unique<CollisionWorld>(collision_settings(scene, LodPolicy::screen));
+    for (const ObjectDesc& o : scene.objects) (void)world->create(TreeSource::fixed(o.tree), o.pose);
+    std::vector<Contact> contacts;
+    world->detect(contacts);
+    const Aabb& b = scene.settings.bounds;
+    std::mt19937 rng(9);
+    for (int i = 0; i < 256; ++i) {
+      const Eigen::Vector3d u(unit(rng), unit(rng), unit(rng));
+      const Eigen::Vector3d p = b.min + u.cwiseProduct(b.max - b.min);
+      origins.push_back(p);
+      dirs.push_back(Eigen::Vector3d(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5).normalized());
+      boxes.push_back({p.array() - kSpacing, p.array() + kSpacing});
+    }
+  }
+};
+
+void BM_RayCast(benchmark::State& state) {
+  QueryWorld q(int(state.range(0)));
+  const bool scan = state.range(1) != 0;
+  size_t k = 0;
+  uint64_t hits = 0, allocations = 0;
+  for (size_t i = 0; i < q.origins.size(); ++i) (void)q.world->ray_cast(q.origins[i], q.dirs[i], INFINITY);  // depths
+  for (auto _ : state) {
+    const uint64_t before = g_allocations.load();
+    const auto hit = scan ? q.world->ray_cast_scan(q.origins[k], q.dirs[k], INFINITY)
+                          : q.world->ray_cast(q.origins[k], q.dirs[k], INFINITY);
+    allocations += g_allocations.load() - before;
+    hits += hit.ok() && hit->has_value();
+    k = (k + 1) % q.origins.size();
+  }
+  state.counters["hit_rate"] = double(hits) / double(state.iterations());
+  state.counters["allocs_per_query"] = double(allocations) / double(state.iterations());
+}
+BENCHMARK(BM_RayCast)
+    ->ArgsProduct({{10'000, 100'000}, {1, 0}})
+    ->ArgNames({"objects", "scan"})
+    ->Unit(benchmark::kMicrosecond);
+
+void BM_OverlapBox(benchmark::State& state) {
+  QueryWorld q(int(state.range(0)));
+  const bool scan = state.range(1) != 0;
+  std::vector<ObjectHandle> out;
+  out.reserve(1024);
+  size_t k = 0;
+  uint64_t found = 0, allocations = 0;
+  for (const Aabb& b : q.boxes) (void)q.world->overlap_box(b, out);  // depths and scratch
+  for (auto _ : state) {
+    const uint64_t before = g_allocations.load();
+    (void)(scan ? q.world->overlap_box_scan(q.boxes[k], out) : q.world->overlap_box(q.boxes[k], out));
+    allocations += g_allocations.load() - before;
+    found += out.size();
+    k = (k + 1) % q.boxes.size();
+  }
+  state.counters["found"] = double(found) / double(state.iterations());
+  state.counters["allocs_per_query"] = double(allocations) / double(state.iterations());
+}
+BENCHMARK(BM_OverlapBox)
+    ->ArgsProduct({{10'000, 100'000}, {1, 0}})
+    ->ArgNames({"objects", "scan"})
+    ->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace octbake

@@ -175,6 +175,11 @@ struct DetectStats {
   uint64_t contacts = 0;
   uint64_t area_computations = 0;  // pixel areas computed this frame
   uint64_t depth_clamps = 0;       // streamed objects tested shallower than asked (memory budget)
+  // Streamed trees whose LevelCache::require failed this frame (a damaged
+  // level that does not decode): one per failing require. Their objects are
+  // tested at the depth still held (conservative, as for depth_clamps); the
+  // error itself is CollisionWorld::last_stream_error().
+  uint64_t stream_errors = 0;
 };
 
 struct RayHit {
@@ -186,9 +191,16 @@ struct RayHit {
 
 class OCTBAKE_API CollisionWorld {
  public:
-  // settings.world_depth is clamped into 0..10; bounds must have a positive
-  // extent on every axis (else it is replaced by the default box).
+  // The lenient form: settings.world_depth is clamped into 0..10; bounds
+  // without a finite positive extent on every axis are replaced by the
+  // default box; threads < 1 run inline. Prefer make(), which refuses them.
   explicit CollisionWorld(CollisionSettings settings);
+  // The strict form: validate(settings), then the world.
+  static Result<std::unique_ptr<CollisionWorld>> make(CollisionSettings settings);
+  // Refuses (ErrorCode::invalid_argument, the message naming the setting):
+  // bounds not finite or without a positive extent on some axis, world_depth
+  // outside 0..10, threads < 1, and LodSettings set_lod() refuses.
+  static Status validate(const CollisionSettings& settings);
   ~CollisionWorld();
   CollisionWorld(const CollisionWorld&) = delete;
   CollisionWorld& operator=(const CollisionWorld&) = delete;
@@ -232,6 +244,11 @@ class OCTBAKE_API CollisionWorld {
   // Steady state (no new objects, same number of pairs or fewer) allocates
   // nothing.
   DetectStats detect(std::vector<Contact>& out);
+  // The error of the last failing LevelCache::require in detect() (names the
+  // file, tree and reason), kept until a later failure replaces it; nullopt
+  // while none failed. Counted per frame in DetectStats::stream_errors. A
+  // frame without failures allocates nothing for it.
+  const std::optional<Error>& last_stream_error() const { return last_stream_error_; }
 
   // Moves the WorldTree to the poses set so far (detect() starts with it).
   // Optional: lets the simulation layer (or an app) see world_tree() follow
@@ -249,15 +266,33 @@ class OCTBAKE_API CollisionWorld {
   // [0, max_distance], among every object's leaf boxes at its current depth.
   // Conservative: a ray through an occupied leaf box (padded by 1e-9
   // relative) hits; the distance is that box's entry distance (0 when the
-  // origin is inside). nullopt when nothing is hit. Errors: non-finite
-  // input, zero direction, max_distance < 0.
+  // origin is inside); ties go to the smallest slot. nullopt when nothing is
+  // hit. Errors: non-finite input, zero direction, max_distance < 0.
+  // Cost: the WorldTree cells along the ray up to the nearest hit (a DDA that
+  // also walks the border cells for rays outside the world box), the objects
+  // in them, the overflow objects and the objects moved since the last
+  // detect()/commit_poses(); not O(objects). Only objects whose world AABB
+  // the ray meets get their depth refreshed and their tree searched.
   Result<std::optional<RayHit>> ray_cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
                                          double max_distance);
   // Replaces `out` with every object, ascending slot, with a leaf box at its
   // current depth overlapping the world box (resp. the sphere). Conservative
   // as above. Errors: non-finite input, min > max, radius < 0.
+  // Cost: the WorldTree cells the box (the sphere's bounding box) covers, or
+  // the occupied cells when fewer, their objects, the overflow objects and
+  // the objects moved since the last detect()/commit_poses(); then a leaf
+  // search of each object whose world AABB overlaps.
   Status overlap_box(const Aabb& box, std::vector<ObjectHandle>& out);
   Status overlap_sphere(const Eigen::Vector3d& center, double radius, std::vector<ObjectHandle>& out);
+  // The same queries by a scan over every object (the implementation before
+  // the WorldTree was used, O(objects)): the reference the tests and
+  // benchmarks compare with. Same results (ray_cast_scan keeps its historic
+  // slot-order pruning, which can differ only when two distances agree to
+  // within rounding).
+  Result<std::optional<RayHit>> ray_cast_scan(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                                              double max_distance);
+  Status overlap_box_scan(const Aabb& box, std::vector<ObjectHandle>& out);
+  Status overlap_sphere_scan(const Eigen::Vector3d& center, double radius, std::vector<ObjectHandle>& out);
 
   // ---- for the simulation layer and tools ----
   const WorldTree& world_tree() const { return tree_; }
@@ -309,6 +344,16 @@ class OCTBAKE_API CollisionWorld {
   PlacedTree placed(uint32_t i) const;
   void run_parallel(size_t count, size_t grain, RangeTask task);
   void test_pairs(size_t begin, size_t end);
+  // Queries: the nearest leaf of slot i entered within `limit` past t_box
+  // (local distance and box); does slot i have a leaf overlapping the box
+  // (sphere)? Depths must be current.
+  bool ray_leaves(uint32_t i, const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double t_box, double limit,
+                  double& local, BoxCoord& box) const;
+  bool box_leaves(uint32_t i, const Aabb& box) const;
+  bool sphere_leaves(uint32_t i, const Eigen::Vector3d& center, double radius) const;
+  // query_ids_: the slots whose world AABB may overlap `box`, ascending, once:
+  // the WorldTree's answer for committed objects, plus the moved ones.
+  void query_candidates(const Aabb& box);
 
   CollisionSettings settings_;
   CameraView view_;  // settings_.camera prepared for pixel_area
@@ -344,6 +389,11 @@ class OCTBAKE_API CollisionWorld {
   std::vector<double> areas_scratch_;
   std::vector<int> max_scratch_, depth_scratch_;
   std::unique_ptr<ThreadPool> pool_;
+  std::optional<Error> last_stream_error_;
+  // Query scratch: candidate slots, and per-slot visit stamps (ray_cast).
+  std::vector<uint32_t> query_ids_;
+  std::vector<uint32_t> visit_;
+  uint32_t visit_epoch_ = 0;
 };
 
 // The SAT estimate between two overlapping oriented boxes (see ContactEstimate).

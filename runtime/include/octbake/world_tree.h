@@ -65,6 +65,56 @@ class OCTBAKE_API WorldTree {
   bool contains(uint32_t id) const { return id < entries_.size() && entries_[id].present; }
   bool in_overflow(uint32_t id) const { return contains(id) && entries_[id].overflow; }
 
+  // ---- queries ----
+  // Every object whose cell range meets the (clamped) cell range of `box`,
+  // plus every overflow object, each once, sorted ascending: a superset of the
+  // objects whose update() box overlaps `box`, exactly as candidate_pairs
+  // (the cell map is monotone, so no padding is needed). Dedup without state:
+  // an object is taken only in its first common cell with the query range.
+  // Cost: min(cells in the range, occupied cells) + ids found; `out` is
+  // cleared first and only allocates to grow. `box` must not hold NaN.
+  void query_box(const Aabb& box, std::vector<uint32_t>& out) const;
+  const std::vector<uint32_t>& overflow_ids() const { return overflow_ids_; }  // sorted
+
+  // The occupied cells met by the ray segment origin + t * dir, t in
+  // [0, t_max] (t_max may be infinite), in order of entry: a 3D DDA
+  // (Amanatides & Woo) over the clamped grid, so a ray outside the world box
+  // still walks the border cells that reach to infinity. Conservative: it
+  // walks a thin tube around the ray (delta grid units, 1e-12 of the
+  // coordinates' magnitude in cells, far above rounding), so every cell whose region
+  // the ray meets, up to rounding, is reported; entry() is never later than
+  // the ray's entry into the tube's part of that cell. Each cell is reported
+  // once; an object spanning several cells is reported once per cell (the
+  // caller dedups). Overflow objects are in no cell: see overflow_ids().
+  // origin and dir must be finite. Holds no allocation; the tree must not
+  // change while walking.
+  class OCTBAKE_API RayWalk {
+   public:
+    RayWalk(const WorldTree& tree, const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double t_max);
+    // Advances to the next occupied cell; false when the segment is done.
+    bool next();
+    double entry() const { return entry_; }  // ray distance at which the current cell was reached
+    std::array<uint16_t, 3> cell() const { return at_; }
+    const std::vector<uint32_t>& ids() const { return tree_->cells_[slot_].ids; }  // sorted
+
+   private:
+    void schedule(int k);  // next lead and trail event times of axis k
+    const WorldTree* tree_;
+    double t_max_;
+    double entry_ = 0;
+    // Per axis, in grid units: g(t) = g0 + t * dg; the tube covers cells
+    // [lo, hi] = clamped floor of g(t) -+ delta. The leading edge (hi when
+    // dg > 0, lo when dg < 0) adds a slab of cells when it crosses a cell
+    // boundary; the trailing edge only shrinks the range.
+    std::array<double, 3> g0_{}, dg_{}, delta_{}, t_lead_{}, t_trail_{};
+    std::array<int, 3> lo_{}, hi_{}, step_{};
+    // The box of cells being enumerated (a slab just reached, or the first box).
+    std::array<int, 3> elo_{}, ehi_{}, cur_{};
+    bool enumerating_ = false;
+    std::array<uint16_t, 3> at_{};
+    uint32_t slot_ = 0;
+  };
+
  private:
   using Coord = std::array<uint16_t, 3>;
   struct Entry {

@@ -164,5 +164,183 @@ TEST(CollisionWorldQuery, OverlapBoxAndSphereMatchBruteForceOverLeafBoxes) {
   EXPECT_GT(box_found, box_nonempty);  // some queries find several objects
 }
 
+// ---- the WorldTree queries against the scan over every object ----
+
+// A world of hundreds to thousands of objects: some outside the world box,
+// some huge (in the WorldTree's overflow set), random rotations, scales
+// 1e-4..1e4 and, in half the worlds, a 1e7 offset. The grid is fine enough
+// (up to 64 cells per axis) that objects span several cells.
+struct BigScene {
+  std::unique_ptr<CollisionWorld> world;
+  std::vector<ObjectHandle> handles;
+  double scale = 1;
+  Eigen::Vector3d offset{0, 0, 0};
+  int huge = 0, outside = 0;
+};
+
+Pose random_pose(std::mt19937& rng, const BigScene& s) {
+  Pose p;
+  const int kind = int(below(rng, 20));
+  // Mostly inside the world box (half-width 100), some beyond it.
+  const double reach = kind < 3 ? 400 : 110;
+  p.position = s.offset + test::random_point(rng, -reach, reach) * s.scale;
+  p.rotation = test::maybe_rotation(rng);
+  p.scale = s.scale * (kind == 0 ? uniform(rng, 5, 15) : uniform(rng, 0.1, 0.6));  // kind 0: huge
+  return p;
+}
+
+BigScene make_big_scene(std::mt19937& rng, const std::vector<ObjectTree>& trees, int objects) {
+  BigScene s;
+  s.scale = std::pow(10.0, uniform(rng, -4, 4));
+  s.offset = below(rng, 2) ? Eigen::Vector3d::Zero() : Eigen::Vector3d(1e7, -1e7, 0.5e7);
+  CollisionSettings cs;
+  cs.bounds = {s.offset.array() - 100 * s.scale, s.offset.array() + 100 * s.scale};
+  cs.world_depth = int(below(rng, 7));
+  cs.lod.policy = LodPolicy::screen;
+  cs.lod.max_depth = 4;
+  cs.lod.pixel_tolerance = 20;
+  cs.camera.position = s.offset + Eigen::Vector3d(0, 0, -300 * s.scale);
+  cs.camera.look_at = s.offset;
+  cs.camera.near_plane = 1e-3 * s.scale;
+  s.world = std::make_unique<CollisionWorld>(cs);
+  for (int i = 0; i < objects; ++i)
+    s.handles.push_back(s.world->create(TreeSource::fixed(&trees[below(rng, uint32_t(trees.size()))]), random_pose(rng, s)).value());
+  std::vector<Contact> contacts;
+  s.world->detect(contacts);  // the WorldTree holds them
+  // Then churn: some destroyed, some moved or created after the last commit,
+  // so the queries see committed and uncommitted objects alike.
+  for (int k = 0; k < objects / 20; ++k) {
+    const size_t i = below(rng, uint32_t(s.handles.size()));
+    if (below(rng, 2)) {
+      EXPECT_TRUE(s.world->destroy(s.handles[i]).ok());
+      s.handles[i] = s.world->create(TreeSource::fixed(&trees[0]), random_pose(rng, s)).value();
+    } else if (s.world->alive(s.handles[i])) {
+      EXPECT_TRUE(s.world->set_pose(s.handles[i], random_pose(rng, s)).ok());
+    }
+  }
+  const Aabb& w = s.world->world_tree().bounds();
+  for (const ObjectHandle h : s.handles) {
+    const Aabb& b = s.world->bounds(h);
+    s.outside += !((b.min.array() >= w.min.array()).all() && (b.max.array() <= w.max.array()).all());
+    s.huge += s.world->world_tree().in_overflow(h.slot);
+  }
+  return s;
+}
+
+void expect_same(const Result<std::optional<RayHit>>& got, const Result<std::optional<RayHit>>& want, const char* what) {
+  ASSERT_TRUE(got.ok() && want.ok());
+  ASSERT_EQ(got->has_value(), want->has_value()) << what;
+  if (!want->has_value()) return;
+  const RayHit &g = **got, &w = **want;
+  EXPECT_EQ(g.object, w.object) << what;
+  EXPECT_EQ(g.distance, w.distance) << what;  // bit for bit
+  EXPECT_EQ(g.depth, w.depth) << what;
+  EXPECT_EQ(g.box.x, w.box.x) << what;
+  EXPECT_EQ(g.box.y, w.box.y) << what;
+  EXPECT_EQ(g.box.z, w.box.z) << what;
+}
+
+TEST(CollisionWorldQuery, WorldTreeRayCastEqualsScanOverEveryObject) {
+  std::mt19937 rng(21);
+  const std::vector<ObjectTree> trees = test::random_trees(rng, 4);
+  uint64_t rays = 0, hits = 0, outside_rays = 0, outside_hits = 0, huge = 0, outside = 0;
+  for (int trial = 0; trial < std::max(2 * kWork, 8); ++trial) {
+    BigScene s = make_big_scene(rng, trees, 200 + int(below(rng, 1800)));
+    huge += s.huge, outside += s.outside;
+    for (int r = 0; r < 60; ++r) {
+      // Origins inside the world and far outside it; targets on objects or
+      // anywhere; a third of the rays unbounded, some axis-aligned.
+      const bool far = below(rng, 3) == 0;
+      const Eigen::Vector3d origin = s.offset + test::random_point(rng, far ? -1000 : -120, far ? 1000 : 120) * s.scale;
+      Eigen::Vector3d target;
+      if (below(rng, 2)) {
+        const ObjectHandle h = s.handles[below(rng, uint32_t(s.handles.size()))];
+        target = s.world->pose(h).value().position;
+      } else {
+        target = s.offset + test::random_point(rng, -300, 300) * s.scale;
+      }
+      Eigen::Vector3d dir = target - origin;
+      if (below(rng, 8) == 0) dir[below(rng, 3)] = 0;
+      if (below(rng, 8) == 0) dir = Eigen::Vector3d::Unit(below(rng, 3)) * (below(rng, 2) ? 1 : -1);
+      if (dir.squaredNorm() == 0) continue;
+      const double max_t = below(rng, 3) == 0 ? INFINITY : uniform(rng, 0, 2000) * s.scale;
+      const auto want = s.world->ray_cast_scan(origin, dir, max_t);
+      const auto got = s.world->ray_cast(origin, dir, max_t);
+      expect_same(got, want, "ray");
+      if (testing::Test::HasFailure()) {
+        ADD_FAILURE() << "trial " << trial << " ray " << r;
+        return;
+      }
+      const Aabb& w = s.world->world_tree().bounds();
+      const bool out = !((origin.array() >= w.min.array()).all() && (origin.array() <= w.max.array()).all());
+      ++rays, outside_rays += out;
+      hits += want->has_value(), outside_hits += out && want->has_value();
+    }
+  }
+  // Not vacuous: hits and misses, rays from outside the world hitting, huge
+  // and outside objects present.
+  EXPECT_GT(hits, rays / 5);
+  EXPECT_LT(hits, rays * 9 / 10);
+  EXPECT_GT(outside_hits, 10u);
+  EXPECT_GT(outside_rays, outside_hits);
+  EXPECT_GT(huge, 0u);
+  EXPECT_GT(outside, 0u);
+}
+
+TEST(CollisionWorldQuery, WorldTreeOverlapsEqualScanOverEveryObject) {
+  std::mt19937 rng(22);
+  const std::vector<ObjectTree> trees = test::random_trees(rng, 4);
+  uint64_t queries = 0, nonempty = 0, found = 0;
+  for (int trial = 0; trial < std::max(2 * kWork, 8); ++trial) {
+    BigScene s = make_big_scene(rng, trees, 200 + int(below(rng, 1800)));
+    for (int q = 0; q < 40; ++q) {
+      const Eigen::Vector3d c = s.offset + test::random_point(rng, -250, 250) * s.scale;
+      const double r = std::pow(10.0, uniform(rng, -1, 2.3)) * s.scale;
+      const Aabb box{c.array() - r * uniform(rng, 0.1, 1), c.array() + r * uniform(rng, 0.1, 1)};
+      std::vector<ObjectHandle> got, want;
+      ASSERT_TRUE(s.world->overlap_box(box, got).ok());
+      ASSERT_TRUE(s.world->overlap_box_scan(box, want).ok());
+      ASSERT_EQ(got, want) << "box, trial " << trial;
+      found += got.size(), nonempty += !got.empty();
+      ASSERT_TRUE(s.world->overlap_sphere(c, r, got).ok());
+      ASSERT_TRUE(s.world->overlap_sphere_scan(c, r, want).ok());
+      ASSERT_EQ(got, want) << "sphere, trial " << trial;
+      found += got.size(), nonempty += !got.empty();
+      queries += 2;
+    }
+  }
+  EXPECT_GT(nonempty, queries / 8);
+  EXPECT_LT(nonempty, queries);
+  EXPECT_GT(found, 2 * nonempty);
+}
+
+// Queries see uncommitted poses: an object moved after the last detect() is
+// found where it is now, not where the WorldTree last put it.
+TEST(CollisionWorldQuery, QueriesSeeUncommittedPoses) {
+  OctreeMasks m;
+  m.bounds = {Eigen::Vector3d::Constant(-1), Eigen::Vector3d::Constant(1)};
+  m.masks.push_back({0xFF});
+  const std::vector<ObjectTree> trees{test::make_tree(std::move(m))};
+  CollisionSettings cs;
+  cs.world_depth = 5;
+  CollisionWorld world(cs);
+  Pose p;
+  p.position = {-80, 0, 0};
+  const ObjectHandle h = world.create(TreeSource::fixed(&trees[0]), p).value();
+  std::vector<Contact> contacts;
+  world.detect(contacts);
+  p.position = {80, 0, 0};
+  ASSERT_TRUE(world.set_pose(h, p).ok());
+  const auto hit = world.ray_cast({0, 0, 0}, {1, 0, 0}, 1000);
+  ASSERT_TRUE(hit.ok() && hit->has_value());
+  EXPECT_EQ((*hit)->object, h);
+  EXPECT_FALSE(world.ray_cast({0, 0, 0}, {-1, 0, 0}, 1000)->has_value());
+  std::vector<ObjectHandle> out;
+  ASSERT_TRUE(world.overlap_box({{70, -30, -30}, {90, 30, 30}}, out).ok());
+  EXPECT_EQ(out, std::vector<ObjectHandle>{h});
+  ASSERT_TRUE(world.overlap_sphere({-80, 0, 0}, 5, out).ok());
+  EXPECT_TRUE(out.empty());
+}
+
 }  // namespace
 }  // namespace octbake

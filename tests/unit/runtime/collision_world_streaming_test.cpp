@@ -159,5 +159,63 @@ TEST(CollisionWorldStreaming, SmallBudgetHoldsClampsAndReportsWhatTheHeldDepthsP
   EXPECT_GT(contacts, 0u);
 }
 
+// A damaged level (level 4 of a depth-5 tree does not decode): detect()
+// still returns the contacts proved at the depth held (3), counts one stream
+// error per failing require, and keeps the decoder's error for the app.
+TEST(CollisionWorldStreaming, DamagedLevelIsReportedAndTestedAtTheHeldDepth) {
+  test::ForgedTree t = test::forged_from(test::full_masks(5), fb::Compression::Zstd);
+  t.name = "crate";
+  t.levels[4].data.assign(t.levels[4].data.size(), 0x5A);
+  test::ForgedTree good = test::forged_from(test::full_masks(5), fb::Compression::Zstd);
+  good.name = "barrel";
+  const std::vector<uint8_t> bytes = test::forge({t, good});
+  Result<BakedFile> file = BakedFile::from_bytes(bytes, "damaged.octb");
+  ASSERT_TRUE(file.ok()) << file.error().message;
+  LevelCache cache;
+  const TreeId broken = cache.add(*file, 0).value(), fine = cache.add(*file, 1).value();
+  CollisionSettings s;
+  s.bounds = {Eigen::Vector3d::Constant(-4), Eigen::Vector3d::Constant(4)};
+  s.lod.policy = LodPolicy::fixed;
+  s.lod.max_depth = 5;
+  CollisionWorld world(s);
+  EXPECT_FALSE(world.last_stream_error().has_value());
+  Pose p;
+  const ObjectHandle a = world.create(TreeSource::streamed(&cache, broken), p).value();
+  p.position = {0.5, 0.5, 0.5};
+  const ObjectHandle b = world.create(TreeSource::streamed(&cache, broken), p).value();
+  p.position = {0.9, 0, 0};
+  const ObjectHandle c = world.create(TreeSource::streamed(&cache, fine), p).value();
+  std::vector<Contact> contacts;
+  for (int frame = 0; frame < 3; ++frame) {
+    const DetectStats st = world.detect(contacts);
+    EXPECT_EQ(st.stream_errors, 1u) << "one failing require (two objects share the broken tree), frame " << frame;
+    ASSERT_TRUE(world.last_stream_error().has_value());
+    const Error& e = *world.last_stream_error();
+    EXPECT_EQ(e.code, ErrorCode::decompress_failed);
+    EXPECT_NE(e.message.find("damaged.octb"), std::string::npos) << e.message;
+    EXPECT_NE(e.message.find("crate"), std::string::npos) << e.message;
+    EXPECT_NE(e.message.find("level 4"), std::string::npos) << e.message;
+    // All three overlap (solid cubes): every pair is a contact, the broken
+    // tree's objects tested at the held depth 3, the good one at 5.
+    ASSERT_EQ(contacts.size(), 3u);
+    for (const Contact& k : contacts) {
+      EXPECT_EQ(k.depth_a, k.a == c ? 5 : 3);
+      EXPECT_EQ(k.depth_b, k.b == c ? 5 : 3);
+    }
+    EXPECT_EQ(contacts[0].a, a);
+    EXPECT_EQ(contacts[0].b, b);
+    EXPECT_EQ(cache.held_depth(broken), 3);
+    EXPECT_EQ(cache.held_depth(fine), 5);
+  }
+  // Moved apart: no pair, no require, no error this frame (the last one is kept).
+  p.position = {3, 3, 3};
+  ASSERT_TRUE(world.set_pose(c, p).ok());
+  p.position = {-3, -3, -3};
+  ASSERT_TRUE(world.set_pose(b, p).ok());
+  EXPECT_EQ(world.detect(contacts).stream_errors, 0u);
+  EXPECT_TRUE(contacts.empty());
+  EXPECT_TRUE(world.last_stream_error().has_value());
+}
+
 }  // namespace
 }  // namespace octbake

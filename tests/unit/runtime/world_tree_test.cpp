@@ -188,5 +188,183 @@ TEST(WorldTree, HugeObjectGoesToOverflowInsteadOfThousandsOfCells) {
   EXPECT_EQ(pairs, (Pairs{{0, 1}}));
 }
 
+// ---- queries ----
+
+// A random world for the query tests: boxes in and around the world box, a
+// few huge ones (overflow at depth >= 4).
+struct QueryScene {
+  Aabb world{{-10, -10, -10}, {10, 10, 10}};
+  GridOracle grid;
+  WorldTree tree;
+  std::vector<Aabb> boxes;
+  std::vector<bool> present;
+  QueryScene(int depth, uint32_t n, std::mt19937& rng) : grid{world, depth}, tree(world, depth), boxes(n), present(n, true) {
+    for (uint32_t i = 0; i < n; ++i) {
+      boxes[i] = random_box(rng, 14.0, i % 97 == 0 ? 12.0 : 1.5);
+      tree.update(i, boxes[i]);
+    }
+    for (uint32_t i = 3; i < n; i += 7) {
+      tree.remove(i);
+      present[i] = false;
+    }
+  }
+  bool in_cell(uint32_t i, const std::array<int, 3>& c) const {
+    const std::array<int, 6> r = grid.range(boxes[i]);
+    for (int k = 0; k < 3; ++k)
+      if (c[k] < r[k] || c[k] > r[3 + k]) return false;
+    return true;
+  }
+};
+
+class WorldTreeQuery : public ::testing::TestWithParam<int> {};
+
+TEST_P(WorldTreeQuery, BoxQueryIsTheObjectsSharingACellPlusOverflow) {
+  const int depth = GetParam();
+  std::mt19937 rng(77 + depth);
+  QueryScene s(depth, 600, rng);
+  std::vector<uint32_t> got;
+  size_t found = 0, overlapping = 0;
+  for (int q = 0; q < 300; ++q) {
+    // Small and large query boxes, some wholly outside the world.
+    const Aabb box = random_box(rng, 16.0, q % 10 == 0 ? 15.0 : 2.0);
+    s.tree.query_box(box, got);
+    std::vector<uint32_t> want;
+    for (uint32_t i = 0; i < s.boxes.size(); ++i) {
+      if (!s.present[i]) continue;
+      const bool candidate = s.grid.overflow(s.boxes[i]) || s.grid.share_cell(s.boxes[i], box);
+      if (overlaps(s.boxes[i], box)) {
+        ++overlapping;
+        EXPECT_TRUE(candidate) << "the oracle itself must not miss " << i;
+      }
+      if (candidate) want.push_back(i);
+    }
+    ASSERT_EQ(got, want) << "query " << q;
+    found += got.size();
+  }
+  EXPECT_GT(overlapping, 300u);
+  EXPECT_GT(found, overlapping);
+}
+
+// Ray segment against a clamped cell's region (border cells reach to
+// infinity): the entry distance, or -1 when missed.
+double ray_cell(const GridOracle& g, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_max,
+                const std::array<int, 3>& c, double inflate) {
+  const int n = 1 << g.depth;
+  double t0 = 0, t1 = t_max;
+  for (int k = 0; k < 3; ++k) {
+    const double size = (g.world.max[k] - g.world.min[k]) / n;
+    const double lo = c[k] == 0 ? -INFINITY : g.world.min[k] + c[k] * size - inflate;
+    const double hi = c[k] == n - 1 ? INFINITY : g.world.min[k] + (c[k] + 1) * size + inflate;
+    if (d[k] == 0) {
+      if (o[k] < lo || o[k] > hi) return -1;
+      continue;
+    }
+    double ta = (lo - o[k]) / d[k], tb = (hi - o[k]) / d[k];
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta), t1 = std::min(t1, tb);
+    if (t0 > t1) return -1;
+  }
+  return t0;
+}
+
+TEST_P(WorldTreeQuery, RayWalkVisitsEveryOccupiedCellTheRayMeetsInOrder) {
+  const int depth = GetParam();
+  std::mt19937 rng(91 + depth);
+  QueryScene s(depth, 400, rng);
+  // The occupied cells (by the oracle), with their occupants.
+  std::vector<std::pair<std::array<int, 3>, std::vector<uint32_t>>> occupied;
+  {
+    std::vector<std::array<int, 3>> all;
+    for (uint32_t i = 0; i < s.boxes.size(); ++i) {
+      if (!s.present[i] || s.grid.overflow(s.boxes[i])) continue;
+      const std::array<int, 6> r = s.grid.range(s.boxes[i]);
+      for (int z = r[2]; z <= r[5]; ++z)
+        for (int y = r[1]; y <= r[4]; ++y)
+          for (int x = r[0]; x <= r[3]; ++x) all.push_back({x, y, z});
+    }
+    std::sort(all.begin(), all.end());
+    all.erase(std::unique(all.begin(), all.end()), all.end());
+    for (const auto& c : all) {
+      std::vector<uint32_t> ids;
+      for (uint32_t i = 0; i < s.boxes.size(); ++i)
+        if (s.present[i] && !s.grid.overflow(s.boxes[i]) && s.in_cell(i, c)) ids.push_back(i);
+      occupied.push_back({c, ids});
+    }
+  }
+  size_t met = 0, outside_met = 0;
+  for (int r = 0; r < 300; ++r) {
+    // Origins in and far around the world box; some directions axis-aligned
+    // or with a zero component; finite and infinite segments.
+    const Eigen::Vector3d o(uniform(rng, -40, 40), uniform(rng, -40, 40), uniform(rng, -40, 40));
+    Eigen::Vector3d d(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1));
+    if (r % 5 == 0) d[r % 3] = 0;
+    if (r % 7 == 0) d = Eigen::Vector3d::Unit(r % 3) * (r % 2 ? 1 : -1);
+    d.normalize();
+    const double t_max = r % 3 == 0 ? INFINITY : uniform(rng, 0, 60);
+    const bool outside = (o.cwiseAbs().array() > 10).any();
+    std::vector<std::array<int, 3>> walked;
+    double last = 0;
+    WorldTree::RayWalk walk(s.tree, o, d, t_max);
+    while (walk.next()) {
+      const std::array<int, 3> c{walk.cell()[0], walk.cell()[1], walk.cell()[2]};
+      EXPECT_GE(walk.entry(), last) << "entries in order";
+      last = walk.entry();
+      auto it = std::find_if(occupied.begin(), occupied.end(), [&](const auto& e) { return e.first == c; });
+      ASSERT_NE(it, occupied.end()) << "walked an empty cell";
+      EXPECT_EQ(walk.ids(), it->second);
+      // Met by the ray (up to the tube's width), and entered no earlier than walked.
+      EXPECT_GE(ray_cell(s.grid, o, d, t_max, c, 1e-6), 0.0) << "walked a cell the ray does not meet, ray " << r;
+      const double t = ray_cell(s.grid, o, d, t_max, c, 0);
+      if (t >= 0) {
+        EXPECT_LE(walk.entry(), t + 1e-9);
+      }
+      walked.push_back(c);
+    }
+    std::vector<std::array<int, 3>> sorted = walked;
+    std::sort(sorted.begin(), sorted.end());
+    EXPECT_EQ(std::adjacent_find(sorted.begin(), sorted.end()), sorted.end()) << "a cell walked twice";
+    for (const auto& [c, ids] : occupied) {
+      const double t = ray_cell(s.grid, o, d, t_max, c, 0);
+      if (t < 0) continue;
+      ++met, outside_met += outside;
+      EXPECT_TRUE(std::binary_search(sorted.begin(), sorted.end(), c))
+          << "missed cell " << c[0] << "," << c[1] << "," << c[2] << " at " << t << ", ray " << r;
+    }
+  }
+  EXPECT_GE(met, 300u);
+  EXPECT_GT(outside_met, 100u);  // rays from outside the world box reach occupied cells
+}
+
+// A ray wholly outside the world box still walks the border cells, which
+// hold the objects clamped into them.
+TEST(WorldTree, RayOutsideTheWorldWalksTheBorderCells) {
+  WorldTree tree({{0, 0, 0}, {8, 8, 8}}, /*depth=*/3);
+  tree.update(0, {{20, 3.5, 20}, {21, 3.6, 21}});  // clamped to x = 7, z = 7
+  tree.update(1, {{4, 4, 4}, {4.5, 4.5, 4.5}});
+  std::vector<std::array<uint16_t, 3>> cells;
+  // Along y, far outside on x and z: only the border column (7, y, 7).
+  WorldTree::RayWalk walk(tree, {30, -50, 30}, {0, 1, 0}, INFINITY);
+  while (walk.next()) cells.push_back(walk.cell());
+  ASSERT_EQ(cells.size(), 1u);
+  EXPECT_EQ(cells[0], (std::array<uint16_t, 3>{7, 3, 7}));
+  // y = 3 is entered at y = 3 (cell boundary), 53 along the ray (up to the tube).
+  WorldTree::RayWalk again(tree, {30, -50, 30}, {0, 1, 0}, INFINITY);
+  ASSERT_TRUE(again.next());
+  EXPECT_NEAR(again.entry(), 53.0, 1e-6);
+  EXPECT_EQ(again.ids(), std::vector<uint32_t>{0});
+  // Stopped short of it: nothing.
+  WorldTree::RayWalk shorter(tree, {30, -50, 30}, {0, 1, 0}, 52.0);
+  EXPECT_FALSE(shorter.next());
+  // An empty tree walks nothing.
+  WorldTree empty({{0, 0, 0}, {8, 8, 8}}, 3);
+  WorldTree::RayWalk none(empty, {1, 1, 1}, {1, 0, 0}, INFINITY);
+  EXPECT_FALSE(none.next());
+  std::vector<uint32_t> ids{5};
+  empty.query_box({{0, 0, 0}, {8, 8, 8}}, ids);
+  EXPECT_TRUE(ids.empty());
+}
+
+INSTANTIATE_TEST_SUITE_P(Depths, WorldTreeQuery, ::testing::Values(0, 2, 4, 6));
+
 }  // namespace
 }  // namespace octbake
