@@ -202,7 +202,9 @@ void set_counters(benchmark::State& state, const DetectStats& total, uint64_t al
 void BM_Detect(benchmark::State& state) {
   const Scene scene = make_scene(int(state.range(0)));
   const LodPolicy policy = LodPolicy(state.range(1));
-  CollisionWorld world(collision_settings(scene, policy));
+  CollisionSettings settings = collision_settings(scene, policy);
+  settings.threads = int(state.range(2));  // the pair tests of a frame on this many threads
+  CollisionWorld world(settings);
   std::vector<ObjectHandle> handles;
   for (const ObjectDesc& o : scene.objects) handles.push_back(world.create(TreeSource::fixed(o.tree), o.pose).value());
   AppMotion motion(scene);
@@ -242,13 +244,13 @@ void BM_Detect(benchmark::State& state) {
 // Fixed frame counts, so every case (and FCL) sees exactly the same poses.
 constexpr int kFrames10k = 300, kFrames100k = 40;
 BENCHMARK(BM_Detect)
-    ->ArgsProduct({{10'000}, {int(LodPolicy::screen), int(LodPolicy::fixed)}})
-    ->ArgNames({"objects", "policy"})
+    ->ArgsProduct({{10'000}, {int(LodPolicy::screen), int(LodPolicy::fixed)}, {1, 2}})
+    ->ArgNames({"objects", "policy", "threads"})
     ->Iterations(kFrames10k)
     ->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Detect)
-    ->ArgsProduct({{100'000}, {int(LodPolicy::screen), int(LodPolicy::fixed)}})
-    ->ArgNames({"objects", "policy"})
+    ->ArgsProduct({{100'000}, {int(LodPolicy::screen), int(LodPolicy::fixed)}, {1, 2}})
+    ->ArgNames({"objects", "policy", "threads"})
     ->Iterations(kFrames100k)
     ->Unit(benchmark::kMicrosecond);
 
