@@ -9,6 +9,7 @@
 #include <condition_variable>
 #include <cstring>
 #include <type_traits>
+#include <limits>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -31,6 +32,10 @@ constexpr double kRelativePad = 1e-9;
 constexpr size_t kPairGrain = 64;  // pairs per parallel chunk
 
 std::atomic<uint32_t> g_next_world_id{1};
+
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+// Slot::area when the depth was decided from a lower bound (see refresh_depth).
+constexpr double kAreaNotComputed = std::numeric_limits<double>::quiet_NaN();
 
 bool overlaps(const Aabb& a, const Aabb& b) {
   return (a.min.array() <= b.max.array()).all() && (b.min.array() <= a.max.array()).all();
@@ -410,8 +415,21 @@ uint64_t CollisionWorld::refresh_depth(uint32_t i) {
   Slot& s = slots_[i];
   if (s.area_epoch == epoch_) return 0;
   uint64_t computed = 0;
-  // The fixed policy does not look at the area: it is not computed.
-  if (settings_.lod.policy != LodPolicy::fixed) {
+  // The fixed policy does not look at the area: it is not computed. Neither
+  // does screen when a lower bound already gives the deepest depth (screen
+  // depths never fall as the area grows): near objects cost a bound only.
+  if (settings_.lod.policy == LodPolicy::screen) {
+    const OrientedBox box = place(tree_of(s).bounds(), s.pose);
+    const int deepest = depth_for(settings_.lod, kInfinity, 0, 0, max_depth_of(s));
+    if (depth_for(settings_.lod, pixel_area_lower_bound(view_, box), 0, 0, max_depth_of(s)) == deepest) {
+      s.area = kAreaNotComputed;  // area() computes it if asked
+      s.depth = deepest;
+      s.area_epoch = epoch_;
+      return 0;
+    }
+    s.area = pixel_area(view_, box);
+    computed = 1;
+  } else if (settings_.lod.policy != LodPolicy::fixed) {
     s.area = pixel_area(view_, place(tree_of(s).bounds(), s.pose));
     computed = 1;
   }
@@ -481,7 +499,7 @@ Result<double> CollisionWorld::area(ObjectHandle h) {
   Slot& s = slots_[h.slot];
   if (settings_.area_refresh == AreaRefresh::on_demand) {
     refresh_depth(h.slot);
-    if (settings_.lod.policy == LodPolicy::fixed)
+    if (settings_.lod.policy == LodPolicy::fixed || std::isnan(s.area))
       s.area = pixel_area(view_, place(tree_of(s).bounds(), s.pose));
   }
   return s.area;

@@ -235,6 +235,30 @@ double pixel_area(const CameraView& view, const OrientedBox& box) {
 
 double pixel_area(const Camera& camera, const OrientedBox& box) { return pixel_area(CameraView(camera), box); }
 
+double pixel_area_lower_bound(const CameraView& view, const OrientedBox& box) {
+  if (view.width() <= 0 || view.height() <= 0) return 0;
+  const Camera& camera = view.camera();
+  const Vec3 rel = box.center - camera.position;
+  const Vec3 c = view.basis() * rel;
+  const double r = box.half.minCoeff();
+  // pixel_area's near plane; the sphere must lie in front of it and inside
+  // the four side planes (tan * z +- x >= 0), by its radius.
+  const double near = std::max(camera.near_plane, 1e-12 * (rel.norm() + box.half.sum()));
+  const double tx = view.tan_x(), ty = view.tan_y();
+  const double rx = r * std::sqrt(1 + tx * tx), ry = r * std::sqrt(1 + ty * ty);
+  if (!(r > 0) || c.z() - r < near || tx * c.z() + c.x() < rx || tx * c.z() - c.x() < rx || ty * c.z() + c.y() < ry ||
+      ty * c.z() - c.y() < ry)
+    return 0;
+  // Solid angle of the sphere, 2 pi (1 - cos a) with sin a = r / |c| (written
+  // without cancellation), in pixels: the image plane at z = 1 is scaled by
+  // w / (2 tan_x) and h / (2 tan_y).
+  const double s2 = r * r / c.squaredNorm();
+  const double solid = 2 * std::numbers::pi * s2 / (1 + std::sqrt(1 - s2));
+  const double pixels = solid * (0.5 * view.width() / tx) * (0.5 * view.height() / ty);
+  // Rounding of both computations is ~1e-15 relative: a wide margin.
+  return std::isfinite(pixels) ? std::min(pixels * (1 - 1e-9), view.width() * view.height()) : 0.0;
+}
+
 namespace detail {
 double pixel_area_clipped(const Camera& camera, const OrientedBox& box) {
   const CameraView view(camera);

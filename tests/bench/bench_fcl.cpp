@@ -227,12 +227,14 @@ void octbake_frames(benchmark::State& state, BenchScene* b, LodSettings lod, con
     for (size_t i = 0; i < b->scene.objects.size(); ++i)
       handles.push_back(*world.create(TreeSource::fixed(&b->models.trees[b->models.tree_of_object[i]]), b->poses[0][i]));
     double seconds = 0;
-    uint64_t box_tests = 0;
+    uint64_t box_tests = 0, areas = 0;
     for (size_t f = 0; f < b->poses.size(); ++f) {
       const auto t0 = Clock::now();
       world.set_camera(camera_on_path(b->scene.camera, b->scene.camera_path, static_cast<int64_t>(f)));
       for (uint32_t i : moving) (void)world.set_pose(handles[i], b->poses[f][i]);
-      box_tests += world.detect(contacts).box_tests;
+      const DetectStats d = world.detect(contacts);
+      box_tests += d.box_tests;
+      areas += d.area_computations;
       seconds += seconds_since(t0);
       if (scored) continue;
       PairList reported;
@@ -241,6 +243,7 @@ void octbake_frames(benchmark::State& state, BenchScene* b, LodSettings lod, con
     }
     scored = true;
     state.counters["box_tests"] = double(box_tests) / double(b->poses.size());
+    state.counters["areas"] = double(areas) / double(b->poses.size());
     state.SetIterationTime(seconds / double(b->poses.size()));
   }
   state.counters["recall"] = score.recall();

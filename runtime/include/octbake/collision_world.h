@@ -119,7 +119,9 @@ enum class AreaRefresh {
   // Default. An object's area is recomputed when it is needed (it is in a
   // tested pair, or a query reaches it) and its pose, the camera or the LOD
   // settings changed since it was last computed. With the fixed and screen
-  // policies only objects in tested pairs are computed; thesis needs every
+  // policies only objects in tested pairs are computed, and screen skips the
+  // exact area when pixel_area_lower_bound already gives the deepest depth
+  // (not counted in area_computations); thesis needs every
   // area (its A_min and A_max are global): when anything changed, every live
   // object's area is recomputed, O(objects) per frame.
   on_demand,
@@ -305,8 +307,9 @@ class OCTBAKE_API CollisionWorld {
     assert(alive(h));
     return alive(h) ? boxes_[h.slot] : kNone;
   }
-  // Depth and area as last computed (no refresh). Precondition: alive(h)
-  // (asserted; 0 in release builds for a dead handle).
+  // Depth and area as last computed (no refresh). The area is NaN when the
+  // screen policy decided the depth from a lower bound (area() computes it).
+  // Precondition: alive(h) (asserted; 0 in release builds for a dead handle).
   int cached_depth(ObjectHandle h) const {
     assert(alive(h));
     return alive(h) ? slots_[h.slot].depth : 0;

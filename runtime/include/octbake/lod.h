@@ -49,6 +49,13 @@ class OCTBAKE_API CameraView {
   double tan_x_ = 0, tan_y_ = 0, width_ = 0, height_ = 0;
 };
 OCTBAKE_API double pixel_area(const CameraView& view, const OrientedBox& box);
+// A lower bound of pixel_area(view, box) at a fraction of its cost: the
+// solid angle of the box's inscribed sphere when that sphere lies wholly
+// inside the view frustum (its image is then inside the viewport and inside
+// the box's outline, and projecting onto the image plane never shrinks solid
+// angle), 0 otherwise. Lets a policy that only needs to know "at least this
+// many pixels" skip the exact area.
+OCTBAKE_API double pixel_area_lower_bound(const CameraView& view, const OrientedBox& box);
 
 enum class LodPolicy { fixed, thesis, screen };
 inline constexpr LodPolicy kLodPolicies[] = {LodPolicy::fixed, LodPolicy::thesis, LodPolicy::screen};

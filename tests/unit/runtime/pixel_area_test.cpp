@@ -215,6 +215,35 @@ TEST(PixelArea, ProjectedHullEqualsFrustumClipping) {
   EXPECT_GT(inside, 0);
 }
 
+// The inscribed sphere's solid angle never exceeds the area, and is close to
+// it for boxes well inside the view (else the bound would be useless).
+TEST(PixelArea, LowerBoundHolds) {
+  std::mt19937 rng(91);
+  int useful = 0, cases = 0;
+  for (int run = 0; run < 20000; ++run) {
+    const double offset = run % 5 == 0 ? 1e7 : 0, size = std::pow(10.0, -3 + 6 * uniform01(rng));
+    Camera cam;
+    cam.position = Eigen::Vector3d::Constant(offset) + random_vector(rng, 10 * size);
+    cam.look_at = Eigen::Vector3d::Constant(offset) + random_vector(rng, size);
+    cam.up = random_vector(rng, 1);
+    cam.fov_y_deg = 10 + 150 * uniform01(rng);
+    cam.viewport_w = 1 + int(rng() % 4000);
+    cam.viewport_h = 1 + int(rng() % 3000);
+    cam.near_plane = run % 3 == 0 ? 0 : 1e-3 * size;
+    const double flat = run % 7 == 0 ? 1e-4 : 0.01;
+    const OrientedBox box = make_box(Eigen::Vector3d::Constant(offset) + random_vector(rng, 3 * size),
+                                     size * Eigen::Vector3d(flat + uniform01(rng), 0.01 + uniform01(rng), 0.01 + uniform01(rng)),
+                                     random_rotation(rng));
+    const CameraView view(cam);
+    const double bound = pixel_area_lower_bound(view, box), area = pixel_area(view, box);
+    ASSERT_LE(bound, area) << "run " << run;
+    ASSERT_GE(bound, 0.0);
+    ++cases;
+    useful += bound > 0.2 * area && area > 1;
+  }
+  EXPECT_GT(useful, cases / 20);
+}
+
 TEST(PixelArea, UpAlongTheViewDirectionStillWorks) {
   Camera cam;
   cam.position = {0, 10, 0};
