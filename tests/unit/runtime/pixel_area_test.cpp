@@ -185,25 +185,37 @@ TEST(PixelArea, ExtremeCamerasStayFiniteAndSane) {
       }
 }
 
-// The fast path (project the corners, clip the hull in 2D) against clipping
+// A random camera and box for run `run`: sizes 1e-3..1e3, every fifth at a
+// 1e7 offset, any fov and viewport, near planes 0 and tiny, some boxes flat.
+struct RandomView {
+  Camera cam;
+  OrientedBox box;
+};
+RandomView random_view(std::mt19937& rng, int run) {
+  const double offset = run % 5 == 0 ? 1e7 : 0, size = std::pow(10.0, -3 + 6 * uniform01(rng));
+  RandomView v;
+  v.cam.position = Eigen::Vector3d::Constant(offset) + random_vector(rng, 10 * size);
+  v.cam.look_at = Eigen::Vector3d::Constant(offset) + random_vector(rng, size);
+  v.cam.up = random_vector(rng, 1);
+  v.cam.fov_y_deg = 10 + 150 * uniform01(rng);
+  v.cam.viewport_w = 1 + int(rng() % 4000);
+  v.cam.viewport_h = 1 + int(rng() % 3000);
+  v.cam.near_plane = run % 3 == 0 ? 0 : 1e-3 * size;
+  const double flat = run % 7 == 0 ? 1e-4 : 0.01;
+  v.box = make_box(Eigen::Vector3d::Constant(offset) + random_vector(rng, 3 * size),
+                   size * Eigen::Vector3d(flat + uniform01(rng), 0.01 + uniform01(rng), 0.01 + uniform01(rng)),
+                   random_rotation(rng));
+  return v;
+}
+
+// The fast path (the front faces projected, clipped in 2D) against clipping
 // every face in 3D, over boxes in view, partly in view, far, tiny, huge and at
 // 1e7 offsets: the same area to rounding.
-TEST(PixelArea, ProjectedHullEqualsFrustumClipping) {
+TEST(PixelArea, ProjectedFacesEqualFrustumClipping) {
   std::mt19937 rng(77);
   int partial = 0, inside = 0, cases = 0;
   for (int run = 0; run < 20000; ++run) {
-    const double offset = run % 5 == 0 ? 1e7 : 0, size = std::pow(10.0, -3 + 6 * uniform01(rng));
-    Camera cam;
-    cam.position = Eigen::Vector3d::Constant(offset) + random_vector(rng, 10 * size);
-    cam.look_at = Eigen::Vector3d::Constant(offset) + random_vector(rng, size);
-    cam.up = random_vector(rng, 1);
-    cam.fov_y_deg = 10 + 150 * uniform01(rng);
-    cam.viewport_w = 1 + int(rng() % 4000);
-    cam.viewport_h = 1 + int(rng() % 3000);
-    cam.near_plane = run % 3 == 0 ? 0 : 1e-3 * size;
-    const OrientedBox box = make_box(Eigen::Vector3d::Constant(offset) + random_vector(rng, 3 * size),
-                                     size * Eigen::Vector3d(0.01 + uniform01(rng), 0.01 + uniform01(rng), 1e-4 + uniform01(rng)),
-                                     random_rotation(rng));
+    const auto [cam, box] = random_view(rng, run);
     const double fast = pixel_area(cam, box), clipped = detail::pixel_area_clipped(cam, box);
     const double full = double(cam.viewport_w) * cam.viewport_h;
     ASSERT_NEAR(fast, clipped, 1e-9 * full + 1e-6) << "run " << run;
@@ -221,19 +233,7 @@ TEST(PixelArea, LowerBoundHolds) {
   std::mt19937 rng(91);
   int useful = 0, cases = 0;
   for (int run = 0; run < 20000; ++run) {
-    const double offset = run % 5 == 0 ? 1e7 : 0, size = std::pow(10.0, -3 + 6 * uniform01(rng));
-    Camera cam;
-    cam.position = Eigen::Vector3d::Constant(offset) + random_vector(rng, 10 * size);
-    cam.look_at = Eigen::Vector3d::Constant(offset) + random_vector(rng, size);
-    cam.up = random_vector(rng, 1);
-    cam.fov_y_deg = 10 + 150 * uniform01(rng);
-    cam.viewport_w = 1 + int(rng() % 4000);
-    cam.viewport_h = 1 + int(rng() % 3000);
-    cam.near_plane = run % 3 == 0 ? 0 : 1e-3 * size;
-    const double flat = run % 7 == 0 ? 1e-4 : 0.01;
-    const OrientedBox box = make_box(Eigen::Vector3d::Constant(offset) + random_vector(rng, 3 * size),
-                                     size * Eigen::Vector3d(flat + uniform01(rng), 0.01 + uniform01(rng), 0.01 + uniform01(rng)),
-                                     random_rotation(rng));
+    const auto [cam, box] = random_view(rng, run);
     const CameraView view(cam);
     const double bound = pixel_area_lower_bound(view, box), area = pixel_area(view, box);
     ASSERT_LE(bound, area) << "run " << run;
