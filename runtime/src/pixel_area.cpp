@@ -1,18 +1,20 @@
 // Pixel area of a posed box (docs/interface.md section 7). A box wholly
 // outside one frustum plane is 0 at once. When the whole box is in front of
-// the near plane (nearly always), its 8 corners are projected,
-// their 2D convex hull (Andrew's monotone chain) is clipped to the viewport
-// rectangle and measured (shoelace): the same region as clipping in 3D, since
-// the frustum's side planes project to the rectangle's edges, at a fraction of
-// the cost. Otherwise its faces are clipped to the view frustum in camera
-// space (Sutherland-Hodgman) before projection.
+// the near plane (nearly always), the faces turned towards the camera (at
+// most 3) are projected and their areas summed: they tile the outline, whose
+// part inside the viewport is the same region as clipping in 3D, since the
+// frustum's side planes project to the rectangle's edges; each face is
+// clipped in 2D only when some corner falls outside the viewport. Otherwise
+// the faces are clipped to the view frustum in camera space
+// (Sutherland-Hodgman), projected, and their 2D convex hull (Andrew's
+// monotone chain) measured (shoelace).
 #include "pixel_area.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <numbers>
 #include <cstdint>
+#include <numbers>
 
 namespace octbake {
 namespace {
