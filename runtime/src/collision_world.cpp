@@ -2,15 +2,14 @@
 #include "octbake/format.h"
 
 #include <algorithm>
-#include <bit>
 #include <atomic>
+#include <bit>
 #include <cassert>
 #include <cmath>
 #include <condition_variable>
-#include <cstring>
-#include <type_traits>
 #include <limits>
 #include <mutex>
+#include <ranges>
 #include <string>
 #include <thread>
 
@@ -36,10 +35,6 @@ std::atomic<uint32_t> g_next_world_id{1};
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 // Slot::area when the depth was decided from a lower bound (see refresh_depth).
 constexpr double kAreaNotComputed = std::numeric_limits<double>::quiet_NaN();
-
-bool overlaps(const Aabb& a, const Aabb& b) {
-  return (a.min.array() <= b.max.array()).all() && (b.min.array() <= a.max.array()).all();
-}
 
 uint64_t pair_key(const std::pair<uint32_t, uint32_t>& p) { return (uint64_t(p.first) << 32) | p.second; }
 
@@ -418,7 +413,7 @@ uint64_t CollisionWorld::refresh_depth(uint32_t i) {
   // The fixed policy does not look at the area: it is not computed. Neither
   // does screen when a lower bound already gives the deepest depth (screen
   // depths never fall as the area grows): near objects cost a bound only.
-  if (settings_.lod.policy == LodPolicy::screen) {
+  if (settings_.lod.policy == LodPolicy::screen) {  // thesis returned above
     const OrientedBox box = place(tree_of(s).bounds(), s.pose);
     const int deepest = depth_for(settings_.lod, kInfinity, 0, 0, max_depth_of(s));
     if (depth_for(settings_.lod, pixel_area_lower_bound(view_, box), 0, 0, max_depth_of(s)) == deepest) {
@@ -428,9 +423,6 @@ uint64_t CollisionWorld::refresh_depth(uint32_t i) {
       return 0;
     }
     s.area = pixel_area(view_, box);
-    computed = 1;
-  } else if (settings_.lod.policy != LodPolicy::fixed) {
-    s.area = pixel_area(view_, place(tree_of(s).bounds(), s.pose));
     computed = 1;
   }
   s.depth = depth_for(settings_.lod, s.area, 0, 0, max_depth_of(s));
@@ -706,20 +698,23 @@ bool CollisionWorld::ray_leaves(uint32_t i, const Eigen::Vector3d& origin, const
 
 namespace {
 
-Error bad_ray() { return bad("ray_cast: non-finite origin or direction, or max_distance < 0"); }
-
-bool bad_ray_input(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double max_distance) {
-  return !origin.allFinite() || !direction.allFinite() || !(max_distance >= 0) || std::isnan(max_distance);
+// The unit direction of a valid ray query, or why it is not one.
+Result<Eigen::Vector3d> ray_direction(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                                      double max_distance) {
+  if (!origin.allFinite() || !direction.allFinite() || !(max_distance >= 0) || std::isnan(max_distance))
+    return bad("ray_cast: non-finite origin or direction, or max_distance < 0");
+  const double len = direction.norm();
+  if (!(len > 0) || !std::isfinite(len)) return bad("ray_cast: zero direction");
+  return Eigen::Vector3d(direction / len);
 }
 
 }  // namespace
 
 Result<std::optional<RayHit>> CollisionWorld::ray_cast_scan(const Eigen::Vector3d& origin,
                                                             const Eigen::Vector3d& direction, double max_distance) {
-  if (bad_ray_input(origin, direction, max_distance)) return bad_ray();
-  const double len = direction.norm();
-  if (!(len > 0) || !std::isfinite(len)) return bad("ray_cast: zero direction");
-  const Eigen::Vector3d dir = direction / len;
+  const Result<Eigen::Vector3d> unit = ray_direction(origin, direction, max_distance);
+  if (!unit) return unit.error();
+  const Eigen::Vector3d& dir = *unit;
   std::optional<RayHit> best;
   double best_t = max_distance;
   for (uint32_t i = 0; i < slots_.size(); ++i) {
@@ -746,10 +741,9 @@ Result<std::optional<RayHit>> CollisionWorld::ray_cast_scan(const Eigen::Vector3
 // this cell, hence no stop at the first hit).
 Result<std::optional<RayHit>> CollisionWorld::ray_cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
                                                        double max_distance) {
-  if (bad_ray_input(origin, direction, max_distance)) return bad_ray();
-  const double len = direction.norm();
-  if (!(len > 0) || !std::isfinite(len)) return bad("ray_cast: zero direction");
-  const Eigen::Vector3d dir = direction / len;
+  const Result<Eigen::Vector3d> unit = ray_direction(origin, direction, max_distance);
+  if (!unit) return unit.error();
+  const Eigen::Vector3d& dir = *unit;
   std::optional<RayHit> best;
   double best_t = max_distance;
   const auto consider = [&](uint32_t i) {
@@ -878,15 +872,20 @@ void CollisionWorld::query_candidates(const Aabb& box) {
   }
 }
 
+template <class Ids, class Leaves>
+void CollisionWorld::keep_overlapping(const Ids& ids, const Aabb& bounds, Leaves leaves, std::vector<ObjectHandle>& out) {
+  for (uint32_t i : ids) {
+    if (!slots_[i].live || !overlaps(boxes_[i], bounds)) continue;
+    if (settings_.area_refresh == AreaRefresh::on_demand) refresh_depth(i);
+    if (leaves(i)) out.push_back({i, slots_[i].generation, id_});
+  }
+}
+
 Status CollisionWorld::overlap_box(const Aabb& box, std::vector<ObjectHandle>& out) {
   out.clear();
   if (bad_box(box)) return bad("overlap_box: non-finite box or min > max");
   query_candidates(box);
-  for (uint32_t i : query_ids_) {
-    if (!overlaps(boxes_[i], box)) continue;
-    if (settings_.area_refresh == AreaRefresh::on_demand) refresh_depth(i);
-    if (box_leaves(i, box)) out.push_back({i, slots_[i].generation, id_});
-  }
+  keep_overlapping(query_ids_, box, [&](uint32_t i) { return box_leaves(i, box); }, out);
   return std::monostate{};
 }
 
@@ -895,22 +894,15 @@ Status CollisionWorld::overlap_sphere(const Eigen::Vector3d& center, double radi
   if (bad_sphere(center, radius)) return bad("overlap_sphere: non-finite center or radius, or radius < 0");
   const Aabb bounds{center.array() - radius, center.array() + radius};
   query_candidates(bounds);
-  for (uint32_t i : query_ids_) {
-    if (!overlaps(boxes_[i], bounds)) continue;
-    if (settings_.area_refresh == AreaRefresh::on_demand) refresh_depth(i);
-    if (sphere_leaves(i, center, radius)) out.push_back({i, slots_[i].generation, id_});
-  }
+  keep_overlapping(query_ids_, bounds, [&](uint32_t i) { return sphere_leaves(i, center, radius); }, out);
   return std::monostate{};
 }
 
 Status CollisionWorld::overlap_box_scan(const Aabb& box, std::vector<ObjectHandle>& out) {
   out.clear();
   if (bad_box(box)) return bad("overlap_box: non-finite box or min > max");
-  for (uint32_t i = 0; i < slots_.size(); ++i) {
-    if (!slots_[i].live || !overlaps(boxes_[i], box)) continue;
-    if (settings_.area_refresh == AreaRefresh::on_demand) refresh_depth(i);
-    if (box_leaves(i, box)) out.push_back({i, slots_[i].generation, id_});
-  }
+  keep_overlapping(std::views::iota(uint32_t{0}, uint32_t(slots_.size())), box,
+                   [&](uint32_t i) { return box_leaves(i, box); }, out);
   return std::monostate{};
 }
 
@@ -918,11 +910,8 @@ Status CollisionWorld::overlap_sphere_scan(const Eigen::Vector3d& center, double
   out.clear();
   if (bad_sphere(center, radius)) return bad("overlap_sphere: non-finite center or radius, or radius < 0");
   const Aabb bounds{center.array() - radius, center.array() + radius};
-  for (uint32_t i = 0; i < slots_.size(); ++i) {
-    if (!slots_[i].live || !overlaps(boxes_[i], bounds)) continue;
-    if (settings_.area_refresh == AreaRefresh::on_demand) refresh_depth(i);
-    if (sphere_leaves(i, center, radius)) out.push_back({i, slots_[i].generation, id_});
-  }
+  keep_overlapping(std::views::iota(uint32_t{0}, uint32_t(slots_.size())), bounds,
+                   [&](uint32_t i) { return sphere_leaves(i, center, radius); }, out);
   return std::monostate{};
 }
 

@@ -273,10 +273,7 @@ void WorldTree::candidate_pairs(std::vector<std::pair<uint32_t, uint32_t>>& out)
 
 void WorldTree::overlapping_pairs(std::span<const Aabb> boxes, std::vector<std::pair<uint32_t, uint32_t>>& out) const {
   assert(boxes.size() >= entries_.size());
-  collect_pairs(out, [&](uint32_t a, uint32_t b) {
-    const Aabb &x = boxes[a], &y = boxes[b];
-    return (x.min.array() <= y.max.array()).all() && (y.min.array() <= x.max.array()).all();
-  });
+  collect_pairs(out, [&](uint32_t a, uint32_t b) { return overlaps(boxes[a], boxes[b]); });
 }
 
 // ---- queries ----

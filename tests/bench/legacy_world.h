@@ -60,10 +60,6 @@ namespace {
 // (collide() pads its boxes too).
 constexpr double kRelativePad = 1e-9;
 
-bool overlaps(const Aabb& a, const Aabb& b) {
-  return (a.min.array() <= b.max.array()).all() && (b.min.array() <= a.max.array()).all();
-}
-
 }  // namespace
 
 World::World(WorldSettings settings, std::vector<ObjectDesc> objects)

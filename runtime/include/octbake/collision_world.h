@@ -357,6 +357,10 @@ class OCTBAKE_API CollisionWorld {
   // query_ids_: the slots whose world AABB may overlap `box`, ascending, once:
   // the WorldTree's answer for committed objects, plus the moved ones.
   void query_candidates(const Aabb& box);
+  // Appends to `out` every live slot of `ids` whose world AABB meets `bounds`
+  // and for which leaves(slot) holds at its current depth.
+  template <class Ids, class Leaves>
+  void keep_overlapping(const Ids& ids, const Aabb& bounds, Leaves leaves, std::vector<ObjectHandle>& out);
 
   CollisionSettings settings_;
   CameraView view_;  // settings_.camera prepared for pixel_area

@@ -16,6 +16,11 @@ struct Aabb {
   bool operator==(const Aabb& o) const { return min == o.min && max == o.max; }
 };
 
+// Closed boxes: touching counts.
+inline bool overlaps(const Aabb& a, const Aabb& b) {
+  return (a.min.array() <= b.max.array()).all() && (b.min.array() <= a.max.array()).all();
+}
+
 enum class Occupancy : uint8_t { surface = 0, solid = 1, vertices = 2 };
 inline constexpr Occupancy kOccupancies[] = {Occupancy::surface, Occupancy::solid, Occupancy::vertices};
 OCTBAKE_API const char* to_string(Occupancy mode);

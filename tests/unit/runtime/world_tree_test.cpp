@@ -28,10 +28,6 @@ Aabb random_box(std::mt19937& rng, double reach, double max_half) {
   return {c - h, c + h};
 }
 
-bool overlaps(const Aabb& a, const Aabb& b) {
-  return (a.min.array() <= b.max.array()).all() && (b.min.array() <= a.max.array()).all();
-}
-
 // The oracle's own idea of the grid: cell = floor((x - min) / size), clamped.
 struct GridOracle {
   Aabb world;
