@@ -28,7 +28,16 @@ namespace {
 // that rounding in the pre-filter never rejects a pair collide() would accept
 // (collide() pads its boxes too). Same rule as the historic World.
 constexpr double kRelativePad = 1e-9;
-constexpr size_t kPairGrain = 64;  // pairs per parallel chunk
+// Items per parallel chunk: enough work per chunk to pay for handing it out.
+constexpr size_t kPairGrain = 64;    // pair tests
+constexpr size_t kPoseGrain = 512;   // set_poses items, commit_poses checks
+constexpr size_t kDepthGrain = 32;   // depth refreshes (a pixel area each at most)
+
+// A RangeTask running f(begin, end); f must outlive the call.
+template <class F>
+RangeTask range_task(const F& f) {
+  return {[](const void* ctx, size_t b, size_t e) { (*static_cast<const F*>(ctx))(b, e); }, &f};
+}
 
 std::atomic<uint32_t> g_next_world_id{1};
 
@@ -163,17 +172,28 @@ ContactEstimate estimate_contact(const OrientedBox& a, const OrientedBox& b) {
 
 // ---- ThreadPool ----
 
+// Workers spin a little before sleeping: detect() hands out several short
+// jobs per frame, and waking a sleeping thread costs more than most of them.
 struct ThreadPool::State {
+  static constexpr int kSpins = 1 << 14;  // pauses, some tens of microseconds
+
   std::mutex mutex;
   std::condition_variable work, done;
   std::vector<std::thread> workers;
+  // Written by parallel_for before it publishes `job` (release) and read by
+  // the workers after they see it (acquire); no job runs while they change.
   RangeTask task;
   size_t count = 0, grain = 1;
   std::atomic<size_t> next{0};
-  size_t active = 0;
-  uint64_t job = 0;
-  bool stop = false;
+  std::atomic<size_t> active{0};  // workers still in the current job
+  std::atomic<uint64_t> job{0};
+  std::atomic<bool> stop{false};
 
+  static void pause() {
+#if defined(__x86_64__) || defined(__i386__)
+    __builtin_ia32_pause();
+#endif
+  }
   void run_chunks() {
     for (;;) {
       const size_t begin = next.fetch_add(grain);
@@ -184,15 +204,18 @@ struct ThreadPool::State {
   void worker() {
     uint64_t seen = 0;
     for (;;) {
-      {
+      for (int i = 0; i < kSpins && job.load(std::memory_order_acquire) == seen && !stop.load(); ++i) pause();
+      if (job.load(std::memory_order_acquire) == seen) {
         std::unique_lock lock(mutex);
-        work.wait(lock, [&] { return stop || job != seen; });
-        if (stop) return;
-        seen = job;
+        work.wait(lock, [&] { return stop.load() || job.load(std::memory_order_acquire) != seen; });
       }
+      if (stop.load()) return;
+      seen = job.load(std::memory_order_acquire);
       run_chunks();
-      std::lock_guard lock(mutex);
-      if (--active == 0) done.notify_one();
+      if (active.fetch_sub(1, std::memory_order_acq_rel) == 1) {
+        std::lock_guard lock(mutex);  // the caller may be about to wait
+        done.notify_one();
+      }
     }
   }
 };
@@ -204,7 +227,7 @@ ThreadPool::ThreadPool(int threads) : state_(std::make_unique<State>()) {
 ThreadPool::~ThreadPool() {
   {
     std::lock_guard lock(state_->mutex);
-    state_->stop = true;
+    state_->stop.store(true);
   }
   state_->work.notify_all();
   for (std::thread& t : state_->workers) t.join();
@@ -216,19 +239,22 @@ void ThreadPool::parallel_for(size_t count, size_t grain, RangeTask task) {
   State& s = *state_;
   grain = std::max<size_t>(grain, 1);
   if (s.workers.empty() || count <= grain) return run_inline(count, task);
+  s.task = task;
+  s.count = count;
+  s.grain = grain;
+  s.next.store(0, std::memory_order_relaxed);
+  s.active.store(s.workers.size(), std::memory_order_relaxed);
   {
-    std::lock_guard lock(s.mutex);
-    s.task = task;
-    s.count = count;
-    s.grain = grain;
-    s.next.store(0);
-    s.active = s.workers.size();
-    ++s.job;
+    std::lock_guard lock(s.mutex);  // a worker between its check and its wait sees it
+    s.job.fetch_add(1, std::memory_order_release);
   }
   s.work.notify_all();
   s.run_chunks();
-  std::unique_lock lock(s.mutex);
-  s.done.wait(lock, [&] { return s.active == 0; });
+  for (int i = 0; i < State::kSpins && s.active.load(std::memory_order_acquire) != 0; ++i) State::pause();
+  if (s.active.load(std::memory_order_acquire) != 0) {
+    std::unique_lock lock(s.mutex);
+    s.done.wait(lock, [&] { return s.active.load(std::memory_order_acquire) == 0; });
+  }
 }
 
 // ---- CollisionWorld ----
@@ -353,30 +379,107 @@ Status CollisionWorld::destroy(ObjectHandle h) {
   return std::monostate{};
 }
 
-Status CollisionWorld::set_pose(ObjectHandle h, const Pose& pose) {
-  if (Status st = check(h); !st) return st;
-  Slot& s = slots_[h.slot];
-  const bool same_frame = same_bits(pose.rotation.coeffs(), s.pose.rotation.coeffs()) && same_bits(pose.scale, s.pose.scale);
-  // An app that sets every pose every frame pays almost nothing for the
-  // objects that did not move (their pose was checked when it was set).
-  if (same_frame && same_bits(pose.position, s.pose.position)) return std::monostate{};
-  if (Status st = check_pose(pose); !st) return st;
-  if (!same_frame) {
+namespace {
+
+// Bitwise the same pose: set_pose is then a no-op (the stored pose was checked).
+bool same_pose(const Pose& a, const Pose& b) {
+  return same_bits(a.rotation.coeffs(), b.rotation.coeffs()) && same_bits(a.scale, b.scale) &&
+         same_bits(a.position, b.position);
+}
+
+}  // namespace
+
+bool CollisionWorld::move_to(uint32_t i, const Pose& pose) {
+  Slot& s = slots_[i];
+  // Cheap when only the position changed: the offset box stays.
+  if (!same_bits(pose.rotation.coeffs(), s.pose.rotation.coeffs()) || !same_bits(pose.scale, s.pose.scale)) {
     Pose at_origin = pose;
     at_origin.position.setZero();
     s.offset = world_bounds(place(tree_of(s).bounds(), at_origin));
   }
   s.pose = pose;
-  place_box(h.slot);
-  if (!s.tree_dirty) {
-    s.tree_dirty = true;
-    dirty_.push_back(h.slot);
-  }
-  if (settings_.area_refresh == AreaRefresh::on_demand) {
-    s.area_epoch = 0;
-    any_stale_area_ = true;
-  }
+  place_box(i);
+  if (settings_.area_refresh == AreaRefresh::on_demand) s.area_epoch = 0;
+  return !std::exchange(s.tree_dirty, true);
+}
+
+Status CollisionWorld::set_pose(ObjectHandle h, const Pose& pose) {
+  if (Status st = check(h); !st) return st;
+  // An app that sets every pose every frame pays almost nothing for the
+  // objects that did not move.
+  if (same_pose(pose, slots_[h.slot].pose)) return std::monostate{};
+  if (Status st = check_pose(pose); !st) return st;
+  if (move_to(h.slot, pose)) dirty_.push_back(h.slot);
+  if (settings_.area_refresh == AreaRefresh::on_demand) any_stale_area_ = true;
   return std::monostate{};
+}
+
+Status CollisionWorld::set_poses(std::span<const ObjectHandle> handles, std::span<const Pose> poses) {
+  if (handles.size() != poses.size())
+    return bad("set_poses: " + std::to_string(handles.size()) + " handles but " + std::to_string(poses.size()) +
+               " poses");
+  if (handles.size() > std::numeric_limits<uint32_t>::max()) return bad("set_poses: more than 2^32 - 1 items");
+  const size_t n = handles.size();
+  if (claim_.size() < slots_.size()) claim_.resize(slots_.size());  // grows with the world only
+  std::atomic<bool> refused{false};
+  // 1. Every item checked as set_pose would; each claims its slot, the last
+  //    claim winning (plain stores: relaxed atomics).
+  const auto check_items = [&](size_t b, size_t e) {
+    bool ok = true;
+    for (size_t k = b; k < e; ++k) {
+      const ObjectHandle h = handles[k];
+      if (!alive(h)) {
+        ok = false;
+        continue;
+      }
+      if (!same_pose(poses[k], slots_[h.slot].pose) && !check_pose(poses[k])) ok = false;
+      std::atomic_ref<uint32_t>(claim_[h.slot]).store(uint32_t(k), std::memory_order_relaxed);
+    }
+    if (!ok) refused.store(true, std::memory_order_relaxed);
+  };
+  run_parallel(n, kPoseGrain, range_task(check_items));
+  // 2. A slot claimed by another item is named twice.
+  const auto check_claims = [&](size_t b, size_t e) {
+    for (size_t k = b; k < e; ++k)
+      if (std::atomic_ref<uint32_t>(claim_[handles[k].slot]).load(std::memory_order_relaxed) != k) {
+        refused.store(true, std::memory_order_relaxed);
+        return;
+      }
+  };
+  if (!refused.load()) run_parallel(n, kPoseGrain, range_task(check_claims));
+  if (refused.load()) return first_pose_error(handles, poses);
+  // 3. The moves, each on its own slot; then the newly dirty listed in order.
+  if (move_flags_.size() < n) move_flags_.resize(n);
+  const auto move_items = [&](size_t b, size_t e) {
+    for (size_t k = b; k < e; ++k) {
+      const uint32_t i = handles[k].slot;
+      move_flags_[k] = same_pose(poses[k], slots_[i].pose) ? kUnmoved : move_to(i, poses[k]) ? kNewlyDirty : kMoved;
+    }
+  };
+  run_parallel(n, kPoseGrain, range_task(move_items));
+  bool moved = false;
+  for (size_t k = 0; k < n; ++k) {
+    moved |= move_flags_[k] != kUnmoved;
+    if (move_flags_[k] == kNewlyDirty) dirty_.push_back(handles[k].slot);
+  }
+  if (moved && settings_.area_refresh == AreaRefresh::on_demand) any_stale_area_ = true;
+  return std::monostate{};
+}
+
+// The error set_poses reports: the first refused item, in index order.
+Status CollisionWorld::first_pose_error(std::span<const ObjectHandle> handles, std::span<const Pose> poses) const {
+  std::vector<uint32_t> first_at(slots_.size(), UINT32_MAX);
+  for (size_t k = 0; k < handles.size(); ++k) {
+    const std::string at = "set_poses: item " + std::to_string(k) + ": ";
+    if (Status st = check(handles[k]); !st) return bad(at + st.error().message);
+    const uint32_t i = handles[k].slot;
+    if (!same_pose(poses[k], slots_[i].pose))
+      if (Status st = check_pose(poses[k]); !st) return bad(at + st.error().message);
+    if (first_at[i] != UINT32_MAX)
+      return bad(at + "the same object as item " + std::to_string(first_at[i]) + " (each object at most once)");
+    first_at[i] = uint32_t(k);
+  }
+  return bad("set_poses: refused");  // not reached: phase 1 or 2 found one of the above
 }
 
 Result<Pose> CollisionWorld::pose(ObjectHandle h) const {
@@ -514,16 +617,33 @@ void CollisionWorld::run_parallel(size_t count, size_t grain, RangeTask task) {
 void CollisionWorld::test_pairs(size_t begin, size_t end) {
   for (size_t k = begin; k < end; ++k) {
     const auto [a, b] = pairs_[k];
-    results_[k].test = settings_.coherence ? collide(placed(a), placed(b), results_[k].cache) : collide(placed(a), placed(b));
+    const PlacedTree pa = placed(a), pb = placed(b);
+    PairResult& r = results_[k];
+    r.test = settings_.coherence ? collide(pa, pb, r.cache) : collide(pa, pb);
+    if (r.test.hit) r.estimate = estimate_contact(leaf_box(pa, r.test.leaf.a), leaf_box(pb, r.test.leaf.b));
   }
 }
 
 void CollisionWorld::commit_poses() {
-  for (uint32_t i : dirty_) {
+  // Which dirty objects changed cells: read only, in parallel. Then the moves
+  // themselves, which share cells, in order. (A slot destroyed and created
+  // again is listed twice; its second entry finds tree_dirty cleared.)
+  const size_t n = dirty_.size();
+  if (move_flags_.size() < n) move_flags_.resize(n);
+  const auto check_cells = [&](size_t b, size_t e) {
+    for (size_t k = b; k < e; ++k) {
+      const uint32_t i = dirty_[k];
+      const Slot& s = slots_[i];
+      move_flags_[k] = s.live && s.tree_dirty && tree_.needs_update(i, boxes_[i]) ? kMoved : kUnmoved;
+    }
+  };
+  run_parallel(n, kPoseGrain, range_task(check_cells));
+  for (size_t k = 0; k < n; ++k) {
+    const uint32_t i = dirty_[k];
     Slot& s = slots_[i];
     if (!s.live || !s.tree_dirty) continue;
     s.tree_dirty = false;
-    if (tree_.update(i, boxes_[i])) cell_changed_[i] = 1;
+    if (move_flags_[k] == kMoved && tree_.update(i, boxes_[i])) cell_changed_[i] = 1;
   }
   dirty_.clear();
 }
@@ -540,17 +660,42 @@ DetectStats CollisionWorld::detect(std::vector<Contact>& out) {
   if (settings_.area_refresh != AreaRefresh::on_demand)
     stats.area_computations = refresh_legacy(settings_.area_refresh == AreaRefresh::every_frame);
 
-  // 3. Candidate pairs, pre-filtered by world AABBs.
-  tree_.overlapping_pairs(boxes_, pairs_);
+  // 3. Candidate pairs, pre-filtered by world AABBs: the cell scan in parts,
+  // each into its own list, joined in part order and sorted.
+  const size_t parts = tree_.scan_parts();
+  if (part_pairs_.size() < parts) part_pairs_.resize(parts);
+  const auto scan = [&](size_t b, size_t e) {
+    for (size_t k = b; k < e; ++k) {
+      part_pairs_[k].clear();
+      tree_.scan_part(k, boxes_, part_pairs_[k]);
+    }
+  };
+  run_parallel(parts, 1, range_task(scan));
+  pairs_.clear();
+  for (size_t k = 0; k < parts; ++k) pairs_.insert(pairs_.end(), part_pairs_[k].begin(), part_pairs_[k].end());
+  tree_.finish_pairs(boxes_, pairs_);
   const size_t n = pairs_.size();
   stats.candidate_pairs = stats.pair_tests = n;
 
-  // 4. Depths of the objects in pairs.
+  // 4. Depths of the objects in pairs: each stale one once, in parallel.
   if (settings_.area_refresh == AreaRefresh::on_demand) {
     if (settings_.lod.policy == LodPolicy::thesis) {
       if (n > 0) stats.area_computations = refresh_all_thesis();
     } else {
-      for (const auto& [a, b] : pairs_) stats.area_computations += refresh_depth(a) + refresh_depth(b);
+      stale_.clear();
+      for (const auto& [a, b] : pairs_)
+        for (uint32_t i : {a, b})
+          if (slots_[i].area_epoch != epoch_) stale_.push_back(i);
+      std::sort(stale_.begin(), stale_.end());
+      stale_.erase(std::unique(stale_.begin(), stale_.end()), stale_.end());
+      std::atomic<uint64_t> computed{0};
+      const auto refresh = [&](size_t b, size_t e) {
+        uint64_t c = 0;
+        for (size_t k = b; k < e; ++k) c += refresh_depth(stale_[k]);
+        computed.fetch_add(c, std::memory_order_relaxed);
+      };
+      run_parallel(stale_.size(), kDepthGrain, range_task(refresh));
+      stats.area_computations = computed.load();
     }
   }
 
@@ -609,24 +754,19 @@ DetectStats CollisionWorld::detect(std::vector<Contact>& out) {
       results_[k].cache = (j < coherence_.size() && coherence_[j].key == key) ? coherence_[j].cache : PairCache{};
     }
   }
-  run_parallel(n, kPairGrain,
-               {[](const void* self, size_t b, size_t e) {
-                  const_cast<CollisionWorld*>(static_cast<const CollisionWorld*>(self))->test_pairs(b, e);
-                },
-                this});
+  run_parallel(n, kPairGrain, range_task([this](size_t b, size_t e) { test_pairs(b, e); }));
   for (size_t k = 0; k < n; ++k) {
-    const PairTest& t = results_[k].test;
-    stats.box_tests += t.box_tests;
-    if (!t.hit) continue;
+    const PairResult& r = results_[k];
+    stats.box_tests += r.test.box_tests;
+    if (!r.test.hit) continue;
     const auto [a, b] = pairs_[k];
-    const PlacedTree pa = placed(a), pb = placed(b);
     Contact c;
     c.a = {a, slots_[a].generation, id_};
     c.b = {b, slots_[b].generation, id_};
-    c.depth_a = pa.depth;
-    c.depth_b = pb.depth;
-    c.box_tests = t.box_tests;
-    c.estimate = estimate_contact(leaf_box(pa, t.leaf.a), leaf_box(pb, t.leaf.b));
+    c.depth_a = slots_[a].depth;
+    c.depth_b = slots_[b].depth;
+    c.box_tests = r.test.box_tests;
+    c.estimate = r.estimate;
     out.push_back(c);
   }
   coherence_next_.clear();

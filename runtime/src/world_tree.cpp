@@ -164,25 +164,36 @@ void WorldTree::relink(uint32_t id, const Coord& lo, const Coord& hi, bool overf
   lo_[id] = lo;
 }
 
-bool WorldTree::update(uint32_t id, const Aabb& box) {
+WorldTree::Range WorldTree::range_of(const Aabb& box) const {
   assert(!box.min.hasNaN() && !box.max.hasNaN());
+  Range r{cell_of(box.min), cell_of(box.max), false};
+  uint64_t count = 1;
+  for (int k = 0; k < 3; ++k) count *= uint64_t(r.hi[k]) - r.lo[k] + 1;
+  r.overflow = count > kMaxCells;
+  return r;
+}
+
+bool WorldTree::needs_update(uint32_t id, const Aabb& box) const {
+  if (!contains(id)) return true;
+  const Range r = range_of(box);
+  const Entry& e = entries_[id];
+  return !(same(e.lo, r.lo) && same(e.hi, r.hi) && e.overflow == r.overflow);
+}
+
+bool WorldTree::update(uint32_t id, const Aabb& box) {
   if (id >= entries_.size()) {
     entries_.resize(id + 1);
     lo_.resize(id + 1);
   }
-  const Coord lo = cell_of(box.min), hi = cell_of(box.max);
-  uint64_t count = 1;
-  for (int k = 0; k < 3; ++k) count *= uint64_t(hi[k]) - lo[k] + 1;
-  const bool overflow = count > kMaxCells;
-
+  const Range r = range_of(box);
   const Entry& e = entries_[id];
   if (e.present) {
-    if (same(e.lo, lo) && same(e.hi, hi) && e.overflow == overflow) return false;
+    if (same(e.lo, r.lo) && same(e.hi, r.hi) && e.overflow == r.overflow) return false;
     ++reinsertions_;
   } else {
     insert_sorted(present_ids_, id);
   }
-  relink(id, lo, hi, overflow);
+  relink(id, r.lo, r.hi, r.overflow);
   return true;
 }
 
@@ -219,17 +230,21 @@ void radix_sort(std::vector<std::pair<uint32_t, uint32_t>>& v, std::vector<std::
 
 }  // namespace
 
+// Busy bitmap words per scan part: 512 cells, enough work to pay for handing
+// a part to another thread.
+constexpr size_t kWordsPerPart = 8;
+
 // The busy cells, each pair emitted only by its first common cell, then one
 // sort: cheaper than visiting every object's cells in id order. `keep`
 // filters pairs before they are stored and sorted.
 template <class Keep>
-void WorldTree::collect_pairs(std::vector<std::pair<uint32_t, uint32_t>>& out, Keep keep) const {
-  out.clear();
+void WorldTree::scan_cells(size_t begin, size_t end, std::vector<std::pair<uint32_t, uint32_t>>& out,
+                           Keep keep) const {
   // The busy cells of one bitmap word at a time, their id lists prefetched a
   // few cells ahead: each list is its own heap block, a cache miss otherwise.
   constexpr int kAhead = 4;
   std::array<uint32_t, 64> slots;
-  for (size_t word = 0; word < busy_.size(); ++word) {
+  for (size_t word = begin; word < end; ++word) {
     int count = 0;
     for (uint64_t bits = busy_[word]; bits != 0; bits &= bits - 1)
       slots[count++] = uint32_t(64 * word + size_t(std::countr_zero(bits)));
@@ -253,6 +268,10 @@ void WorldTree::collect_pairs(std::vector<std::pair<uint32_t, uint32_t>>& out, K
       }
     }
   }
+}
+
+template <class Keep>
+void WorldTree::finish(std::vector<std::pair<uint32_t, uint32_t>>& out, Keep keep) const {
   // Overflow objects are in no cell, so these never repeat a cell pair.
   for (uint32_t a : overflow_ids_)
     for (uint32_t b : present_ids_) {
@@ -268,12 +287,40 @@ void WorldTree::collect_pairs(std::vector<std::pair<uint32_t, uint32_t>>& out, K
 }
 
 void WorldTree::candidate_pairs(std::vector<std::pair<uint32_t, uint32_t>>& out) const {
-  collect_pairs(out, [](uint32_t, uint32_t) { return true; });
+  const auto all = [](uint32_t, uint32_t) { return true; };
+  out.clear();
+  scan_cells(0, busy_.size(), out, all);
+  finish(out, all);
 }
+
+namespace {
+
+// The filter of overlapping_pairs: closed world AABBs that overlap.
+struct BoxesOverlap {
+  std::span<const Aabb> boxes;
+  bool operator()(uint32_t a, uint32_t b) const { return overlaps(boxes[a], boxes[b]); }
+};
+
+}  // namespace
 
 void WorldTree::overlapping_pairs(std::span<const Aabb> boxes, std::vector<std::pair<uint32_t, uint32_t>>& out) const {
   assert(boxes.size() >= entries_.size());
-  collect_pairs(out, [&](uint32_t a, uint32_t b) { return overlaps(boxes[a], boxes[b]); });
+  out.clear();
+  scan_cells(0, busy_.size(), out, BoxesOverlap{boxes});
+  finish(out, BoxesOverlap{boxes});
+}
+
+size_t WorldTree::scan_parts() const { return (busy_.size() + kWordsPerPart - 1) / kWordsPerPart; }
+
+void WorldTree::scan_part(size_t part, std::span<const Aabb> boxes, std::vector<std::pair<uint32_t, uint32_t>>& out) const {
+  assert(boxes.size() >= entries_.size());
+  const size_t begin = std::min(busy_.size(), part * kWordsPerPart);
+  scan_cells(begin, std::min(busy_.size(), begin + kWordsPerPart), out, BoxesOverlap{boxes});
+}
+
+void WorldTree::finish_pairs(std::span<const Aabb> boxes, std::vector<std::pair<uint32_t, uint32_t>>& out) const {
+  assert(boxes.size() >= entries_.size());
+  finish(out, BoxesOverlap{boxes});
 }
 
 // ---- queries ----

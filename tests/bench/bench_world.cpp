@@ -5,7 +5,7 @@
 //
 // The app-driven CollisionWorld on the same scenes (BM_Detect): every pose
 // set by the app each frame (a third moving, a tenth spinning), the camera
-// moving every frame, set_pose + detect() timed; against FCL's
+// moving every frame, set_pose (or one set_poses: batch:1) + detect() timed; against FCL's
 // DynamicAABBTree (setTransform + computeAABB of every object, update(),
 // collide() with the exact OBBRSS BVH test of the box meshes) on the same
 // poses (BM_FclDynamicAabb), and against the World::step of commit 68d2b0b
@@ -203,7 +203,8 @@ void BM_Detect(benchmark::State& state) {
   const Scene scene = make_scene(int(state.range(0)));
   const LodPolicy policy = LodPolicy(state.range(1));
   CollisionSettings settings = collision_settings(scene, policy);
-  settings.threads = int(state.range(2));  // the pair tests of a frame on this many threads
+  settings.threads = int(state.range(2));  // detect()'s parallel parts on this many threads
+  const bool batch = state.range(3) != 0;    // set_poses (parallel) instead of a set_pose loop
   CollisionWorld world(settings);
   std::vector<ObjectHandle> handles;
   for (const ObjectDesc& o : scene.objects) handles.push_back(world.create(TreeSource::fixed(o.tree), o.pose).value());
@@ -228,7 +229,10 @@ void BM_Detect(benchmark::State& state) {
     ++f;
     const uint64_t before = g_allocations.load();
     state.ResumeTiming();
-    for (size_t i = 0; i < handles.size(); ++i) (void)world.set_pose(handles[i], motion.now[i]);
+    if (batch)
+      (void)world.set_poses(handles, motion.now);
+    else
+      for (size_t i = 0; i < handles.size(); ++i) (void)world.set_pose(handles[i], motion.now[i]);
     world.set_camera(camera);
     const DetectStats d = world.detect(contacts);
     state.PauseTiming();
@@ -244,13 +248,13 @@ void BM_Detect(benchmark::State& state) {
 // Fixed frame counts, so every case (and FCL) sees exactly the same poses.
 constexpr int kFrames10k = 300, kFrames100k = 40;
 BENCHMARK(BM_Detect)
-    ->ArgsProduct({{10'000}, {int(LodPolicy::screen), int(LodPolicy::fixed)}, {1, 2}})
-    ->ArgNames({"objects", "policy", "threads"})
+    ->ArgsProduct({{10'000}, {int(LodPolicy::screen), int(LodPolicy::fixed)}, {1, 2}, {0, 1}})
+    ->ArgNames({"objects", "policy", "threads", "batch"})
     ->Iterations(kFrames10k)
     ->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Detect)
-    ->ArgsProduct({{100'000}, {int(LodPolicy::screen), int(LodPolicy::fixed)}, {1, 2}})
-    ->ArgNames({"objects", "policy", "threads"})
+    ->ArgsProduct({{100'000}, {int(LodPolicy::screen), int(LodPolicy::fixed)}, {1, 2}, {0, 1}})
+    ->ArgNames({"objects", "policy", "threads", "batch"})
     ->Iterations(kFrames100k)
     ->Unit(benchmark::kMicrosecond);
 

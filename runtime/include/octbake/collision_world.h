@@ -30,6 +30,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <span>
 #include <variant>
 #include <vector>
 
@@ -138,9 +139,10 @@ struct CollisionSettings {
   LodSettings lod;
   Camera camera;
   AreaRefresh area_refresh = AreaRefresh::on_demand;
-  // Pair tests of a frame run on `executor` when given, else on a built-in
-  // ThreadPool of `threads` threads when threads > 1, else inline. Results
-  // are bit-identical for every choice.
+  // detect() and set_poses() run their parallel parts (pose moves, the
+  // WorldTree's cell checks and pair scan, depths, pair tests) on `executor`
+  // when given, else on a built-in ThreadPool of `threads` threads when
+  // threads > 1, else inline. Results are bit-identical for every choice.
   int threads = 1;
   Executor* executor = nullptr;  // not owned; must outlive the world
   // Temporal coherence: each candidate pair first tries the leaf pair that
@@ -219,6 +221,14 @@ class OCTBAKE_API CollisionWorld {
   // a no-op when nothing changed (bitwise): an app may set every pose every
   // frame.
   Status set_pose(ObjectHandle h, const Pose& pose);
+  // set_pose(handles[k], poses[k]) for every k, all or nothing, on the
+  // world's threads (settings.executor or settings.threads) when the batch is
+  // large: the form for an engine that moves many objects a frame. Refused,
+  // changing nothing, when the spans differ in length, an object appears
+  // twice, or any item would be refused by set_pose; the error names the
+  // first such item (ErrorCode::invalid_argument). Allocates only to grow
+  // its scratch with the world.
+  Status set_poses(std::span<const ObjectHandle> handles, std::span<const Pose> poses);
   Result<Pose> pose(ObjectHandle h) const;
 
   // ---- view and LOD ----
@@ -339,6 +349,10 @@ class OCTBAKE_API CollisionWorld {
   const ObjectTree& tree_of(const Slot& s) const;
   int max_depth_of(const Slot& s) const;
   void place_box(uint32_t slot);  // boxes_[slot] from the slot's pose and offset
+  // Sets live slot i to a checked pose that differs from its own; true when
+  // the slot just became dirty (the caller lists it in dirty_).
+  bool move_to(uint32_t i, const Pose& pose);
+  Status first_pose_error(std::span<const ObjectHandle> handles, std::span<const Pose> poses) const;
   void invalidate_all_areas();
   // Makes the area and depth of slot i current; returns areas computed.
   uint64_t refresh_depth(uint32_t i);
@@ -381,7 +395,15 @@ class OCTBAKE_API CollisionWorld {
   struct PairResult {
     PairTest test;
     PairCache cache;  // in: the last frame's proving leaf pair; out: this frame's
+    ContactEstimate estimate;  // with test.hit
   };
+  std::vector<std::vector<std::pair<uint32_t, uint32_t>>> part_pairs_;  // per WorldTree scan part
+  std::vector<uint32_t> stale_;  // objects in pairs whose depth is stale
+  // set_poses / commit_poses scratch: per item, what moved; per slot, the
+  // item that claimed it (duplicate check).
+  enum : uint8_t { kUnmoved, kMoved, kNewlyDirty };
+  std::vector<uint8_t> move_flags_;
+  std::vector<uint32_t> claim_;
   std::vector<PairResult> results_;
   // Temporal coherence: per candidate pair (slots a < b, sorted by key) the
   // leaf pair that proved its last contact, tried first next frame. Only an

@@ -59,6 +59,20 @@ class OCTBAKE_API WorldTree {
   // filtered before sorting. boxes[id] must be the box last given to update(id).
   void overlapping_pairs(std::span<const Aabb> boxes, std::vector<std::pair<uint32_t, uint32_t>>& out) const;
 
+  // ---- the same work in parallel parts (CollisionWorld runs them on its
+  // executor). These are const and read only, so any number may run at once
+  // while no update() or remove() runs.
+  // Would update(id, box) change anything (a new id, or another cell range)?
+  bool needs_update(uint32_t id, const Aabb& box) const;
+  // overlapping_pairs in pieces: scan_part(k) for every k < scan_parts()
+  // appends (unsorted) the cell pairs of its share of the cells to its own
+  // vector, every pair in exactly one part; finish_pairs, given the parts'
+  // pairs concatenated in any order, adds the overflow pairs and sorts. The
+  // result equals overlapping_pairs however the parts are run.
+  size_t scan_parts() const;
+  void scan_part(size_t part, std::span<const Aabb> boxes, std::vector<std::pair<uint32_t, uint32_t>>& out) const;
+  void finish_pairs(std::span<const Aabb> boxes, std::vector<std::pair<uint32_t, uint32_t>>& out) const;
+
   int depth() const { return depth_; }
   const Aabb& bounds() const { return world_; }
   uint64_t reinsertions() const { return reinsertions_; }
@@ -128,9 +142,18 @@ class OCTBAKE_API WorldTree {
     std::vector<uint32_t> ids;  // sorted ascending
   };
 
+  struct Range {
+    Coord lo, hi;
+    bool overflow;
+  };
   Coord cell_of(const Eigen::Vector3d& p) const;
+  Range range_of(const Aabb& box) const;
+  // The cell pairs of the busy cells of bitmap words [begin, end), appended.
   template <class Keep>
-  void collect_pairs(std::vector<std::pair<uint32_t, uint32_t>>& out, Keep keep) const;
+  void scan_cells(size_t begin, size_t end, std::vector<std::pair<uint32_t, uint32_t>>& out, Keep keep) const;
+  // Appends the overflow pairs and sorts `out`.
+  template <class Keep>
+  void finish(std::vector<std::pair<uint32_t, uint32_t>>& out, Keep keep) const;
   // Moves `id` from the cells of entries_[id]'s range to those of [lo, hi],
   // touching only the cells that differ.
   void relink(uint32_t id, const Coord& lo, const Coord& hi, bool overflow);

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <random>
 #include <vector>
 
@@ -83,6 +84,79 @@ inline std::vector<OrientedBox> world_leaves(const ObjectTree& tree, const Pose&
   std::vector<OrientedBox> out;
   for (const BoxCoord& c : tree.masks().boxes(depth)) out.push_back(leaf_box({&tree, pose, depth}, c));
   return out;
+}
+
+// A crowd of `n` objects (4 random trees) in a cube, for `frames` frames: a
+// third move each frame (a tenth of them turn), the camera moves, and every
+// 4th frame a few are destroyed and created again (their slots reused).
+// Poses go in by one set_poses (batch) or a set_pose loop. Returns a hash of
+// every frame's contacts (all fields) and stats, for comparing runs.
+inline uint64_t crowd_hash(int n, int frames, int threads, bool batch, Executor* executor = nullptr) {
+  std::mt19937 rng(11);
+  const std::vector<ObjectTree> trees = random_trees(rng, 4);
+  const double side = 2.5 * std::cbrt(double(n));
+  CollisionSettings s;
+  s.bounds = {Eigen::Vector3d::Zero(), Eigen::Vector3d::Constant(side)};
+  s.world_depth = 5;
+  s.lod.policy = LodPolicy::screen;
+  s.lod.max_depth = 5;
+  s.threads = threads;
+  s.executor = executor;
+  CollisionWorld world(s);
+  std::vector<ObjectHandle> handles;
+  std::vector<Pose> poses;
+  const auto random_pose = [&] {
+    Pose p;
+    p.position = random_point(rng, 0, side);
+    p.rotation = maybe_rotation(rng);
+    p.scale = uniform(rng, 0.05, 0.12);
+    return p;
+  };
+  for (int i = 0; i < n; ++i) {
+    poses.push_back(random_pose());
+    handles.push_back(world.create(TreeSource::fixed(&trees[size_t(i) % trees.size()]), poses.back()).value());
+  }
+  uint64_t hash = 1469598103934665603ull;
+  const auto mix = [&](const auto& v) {
+    unsigned char b[sizeof(v)];
+    std::memcpy(b, &v, sizeof(v));
+    for (unsigned char c : b) hash = (hash ^ c) * 1099511628211ull;
+  };
+  std::vector<Contact> contacts;
+  uint64_t total_contacts = 0;
+  for (int f = 0; f < frames; ++f) {
+    for (size_t i = 0; i < poses.size(); ++i) {
+      if (below(rng, 3) != 0) continue;
+      poses[i].position += random_point(rng, -0.3, 0.3);
+      if (below(rng, 10) == 0) poses[i].rotation = random_rotation(rng);
+    }
+    if (f % 4 == 3)
+      for (int k = 0; k < 3; ++k) {
+        const size_t i = below(rng, uint32_t(handles.size()));
+        EXPECT_TRUE(world.destroy(handles[i]).ok());
+        poses[i] = random_pose();
+        handles[i] = world.create(TreeSource::fixed(&trees[i % trees.size()]), poses[i]).value();
+      }
+    if (batch) {
+      EXPECT_TRUE(world.set_poses(handles, poses).ok());
+    } else {
+      for (size_t i = 0; i < handles.size(); ++i) EXPECT_TRUE(world.set_pose(handles[i], poses[i]).ok());
+    }
+    Camera camera;
+    camera.position = Eigen::Vector3d(side / 2, side / 2, -side) + random_point(rng, -1, 1);
+    camera.look_at = Eigen::Vector3d::Constant(side / 2);
+    world.set_camera(camera);
+    const DetectStats st = world.detect(contacts);
+    mix(st.candidate_pairs), mix(st.box_tests), mix(st.contacts), mix(st.area_computations);
+    total_contacts += st.contacts;
+    for (const Contact& c : contacts) {
+      mix(c.a.slot), mix(c.a.generation), mix(c.b.slot), mix(c.b.generation), mix(c.depth_a), mix(c.depth_b);
+      mix(c.box_tests), mix(c.estimate.normal), mix(c.estimate.penetration), mix(c.estimate.overlap);
+    }
+    for (const ObjectHandle& h : handles) mix(world.bounds(h));
+  }
+  EXPECT_GT(total_contacts, uint64_t(frames));  // a crowd that touches
+  return hash;
 }
 
 }  // namespace octbake::test
