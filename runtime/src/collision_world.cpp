@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <bit>
 #include <cassert>
 #include <cmath>
@@ -172,21 +173,25 @@ ContactEstimate estimate_contact(const OrientedBox& a, const OrientedBox& b) {
 
 // ---- ThreadPool ----
 
-// Workers spin a little before sleeping: detect() hands out several short
-// jobs per frame, and waking a sleeping thread costs more than most of them.
+// A job is open from parallel_for's start until every chunk is done; a
+// worker joins it only while it is open, so the caller never waits for a
+// worker that was not scheduled in time (it runs the chunks itself). Workers
+// spin a little before sleeping: detect() hands out several short jobs per
+// frame, and waking a sleeping thread costs more than most of them.
 struct ThreadPool::State {
-  static constexpr int kSpins = 1 << 14;  // pauses, some tens of microseconds
+  static constexpr auto kSpin = std::chrono::microseconds(50);
 
   std::mutex mutex;
   std::condition_variable work, done;
   std::vector<std::thread> workers;
-  // Written by parallel_for before it publishes `job` (release) and read by
-  // the workers after they see it (acquire); no job runs while they change.
+  // Set by parallel_for while no worker is inside a job (see `inside`).
   RangeTask task;
   size_t count = 0, grain = 1;
-  std::atomic<size_t> next{0};
-  std::atomic<size_t> active{0};  // workers still in the current job
-  std::atomic<uint64_t> job{0};
+  std::atomic<size_t> next{0};         // first item not yet handed out
+  std::atomic<size_t> chunks_left{0};  // chunks of the open job not yet done
+  std::atomic<uint64_t> job{0};        // bumped when a job opens
+  std::atomic<bool> open{false};
+  std::atomic<int> inside{0};          // workers that joined the current job
   std::atomic<bool> stop{false};
 
   static void pause() {
@@ -194,28 +199,43 @@ struct ThreadPool::State {
     __builtin_ia32_pause();
 #endif
   }
+  // Spins until pred() or kSpin passed; returns pred().
+  template <class Pred>
+  static bool spin(Pred pred) {
+    const auto until = std::chrono::steady_clock::now() + kSpin;
+    for (;;) {
+      for (int i = 0; i < 64; ++i) {
+        if (pred()) return true;
+        pause();
+      }
+      if (std::chrono::steady_clock::now() > until) return pred();
+    }
+  }
   void run_chunks() {
     for (;;) {
       const size_t begin = next.fetch_add(grain);
       if (begin >= count) return;
       task(begin, std::min(count, begin + grain));
+      if (chunks_left.fetch_sub(1) == 1) {
+        std::lock_guard lock(mutex);  // the caller may be about to wait
+        done.notify_one();
+      }
     }
   }
   void worker() {
     uint64_t seen = 0;
     for (;;) {
-      for (int i = 0; i < kSpins && job.load(std::memory_order_acquire) == seen && !stop.load(); ++i) pause();
-      if (job.load(std::memory_order_acquire) == seen) {
+      const auto ready = [&] { return stop.load() || job.load() != seen; };
+      if (!spin(ready)) {
         std::unique_lock lock(mutex);
-        work.wait(lock, [&] { return stop.load() || job.load(std::memory_order_acquire) != seen; });
+        work.wait(lock, ready);
       }
       if (stop.load()) return;
-      seen = job.load(std::memory_order_acquire);
-      run_chunks();
-      if (active.fetch_sub(1, std::memory_order_acq_rel) == 1) {
-        std::lock_guard lock(mutex);  // the caller may be about to wait
-        done.notify_one();
-      }
+      seen = job.load();
+      // Join only the job still open (seq_cst pairs with the caller's close).
+      inside.fetch_add(1);
+      if (open.load() && job.load() == seen) run_chunks();
+      inside.fetch_sub(1);
     }
   }
 };
@@ -242,19 +262,24 @@ void ThreadPool::parallel_for(size_t count, size_t grain, RangeTask task) {
   s.task = task;
   s.count = count;
   s.grain = grain;
-  s.next.store(0, std::memory_order_relaxed);
-  s.active.store(s.workers.size(), std::memory_order_relaxed);
+  s.next.store(0);
+  s.chunks_left.store((count + grain - 1) / grain);
+  s.open.store(true);
   {
     std::lock_guard lock(s.mutex);  // a worker between its check and its wait sees it
-    s.job.fetch_add(1, std::memory_order_release);
+    s.job.fetch_add(1);
   }
   s.work.notify_all();
   s.run_chunks();
-  for (int i = 0; i < State::kSpins && s.active.load(std::memory_order_acquire) != 0; ++i) State::pause();
-  if (s.active.load(std::memory_order_acquire) != 0) {
+  const auto finished = [&] { return s.chunks_left.load() == 0; };
+  if (!State::spin(finished)) {
     std::unique_lock lock(s.mutex);
-    s.done.wait(lock, [&] { return s.active.load(std::memory_order_acquire) == 0; });
+    s.done.wait(lock, finished);
   }
+  // Close the job, then let the workers that joined it leave before its
+  // fields change (they find no chunk left).
+  s.open.store(false);
+  while (s.inside.load() != 0) State::pause();
 }
 
 // ---- CollisionWorld ----
@@ -630,11 +655,15 @@ void CollisionWorld::commit_poses() {
   // again is listed twice; its second entry finds tree_dirty cleared.)
   const size_t n = dirty_.size();
   if (move_flags_.size() < n) move_flags_.resize(n);
+  if (ranges_.size() < n) ranges_.resize(n);
   const auto check_cells = [&](size_t b, size_t e) {
     for (size_t k = b; k < e; ++k) {
       const uint32_t i = dirty_[k];
       const Slot& s = slots_[i];
-      move_flags_[k] = s.live && s.tree_dirty && tree_.needs_update(i, boxes_[i]) ? kMoved : kUnmoved;
+      move_flags_[k] = kUnmoved;
+      if (!s.live || !s.tree_dirty) continue;
+      ranges_[k] = tree_.cell_range(boxes_[i]);
+      if (tree_.needs_update(i, ranges_[k])) move_flags_[k] = kMoved;
     }
   };
   run_parallel(n, kPoseGrain, range_task(check_cells));
@@ -643,9 +672,54 @@ void CollisionWorld::commit_poses() {
     Slot& s = slots_[i];
     if (!s.live || !s.tree_dirty) continue;
     s.tree_dirty = false;
-    if (move_flags_[k] == kMoved && tree_.update(i, boxes_[i])) cell_changed_[i] = 1;
+    if (move_flags_[k] == kMoved && tree_.update_cells(i, ranges_[k])) cell_changed_[i] = 1;
   }
   dirty_.clear();
+}
+
+namespace {
+
+// Takes the pair scan's blocks from every thread: room in `room` is reserved
+// by an atomic counter; a block that does not fit (only in a frame with more
+// pairs than room, i.e. than any frame before) goes to `spill` under a lock.
+// The room filled is the prefix before the first block that did not fit.
+class PairCollector final : public WorldTree::PairSink {
+ public:
+  PairCollector(std::span<std::pair<uint32_t, uint32_t>> room, std::vector<std::pair<uint32_t, uint32_t>>& spill)
+      : room_(room), spill_(spill) {}
+  void take(std::span<const std::pair<uint32_t, uint32_t>> pairs) override {
+    const size_t at = used_.fetch_add(pairs.size(), std::memory_order_relaxed);
+    if (at + pairs.size() <= room_.size()) {
+      std::copy(pairs.begin(), pairs.end(), room_.begin() + ptrdiff_t(at));
+      return;
+    }
+    std::lock_guard lock(mutex_);
+    filled_ = std::min(filled_, at);
+    spill_.insert(spill_.end(), pairs.begin(), pairs.end());
+  }
+  size_t filled() const { return std::min(filled_, used_.load()); }  // after the scan
+
+ private:
+  std::span<std::pair<uint32_t, uint32_t>> room_;
+  std::vector<std::pair<uint32_t, uint32_t>>& spill_;
+  std::atomic<size_t> used_{0};
+  std::mutex mutex_;
+  size_t filled_ = SIZE_MAX;
+};
+
+}  // namespace
+
+void CollisionWorld::collect_pairs() {
+  // pairs_ as room for as many pairs as any frame had (no allocation then).
+  pairs_.resize(std::max<size_t>(pairs_.capacity(), 256));
+  spilled_pairs_.clear();
+  PairCollector collector(pairs_, spilled_pairs_);
+  run_parallel(tree_.scan_parts(), 1, range_task([&](size_t b, size_t e) {
+                 for (size_t k = b; k < e; ++k) tree_.scan_part(k, boxes_, collector);
+               }));
+  pairs_.resize(collector.filled());
+  pairs_.insert(pairs_.end(), spilled_pairs_.begin(), spilled_pairs_.end());
+  tree_.finish_pairs(boxes_, pairs_);
 }
 
 DetectStats CollisionWorld::detect(std::vector<Contact>& out) {
@@ -661,19 +735,8 @@ DetectStats CollisionWorld::detect(std::vector<Contact>& out) {
     stats.area_computations = refresh_legacy(settings_.area_refresh == AreaRefresh::every_frame);
 
   // 3. Candidate pairs, pre-filtered by world AABBs: the cell scan in parts,
-  // each into its own list, joined in part order and sorted.
-  const size_t parts = tree_.scan_parts();
-  if (part_pairs_.size() < parts) part_pairs_.resize(parts);
-  const auto scan = [&](size_t b, size_t e) {
-    for (size_t k = b; k < e; ++k) {
-      part_pairs_[k].clear();
-      tree_.scan_part(k, boxes_, part_pairs_[k]);
-    }
-  };
-  run_parallel(parts, 1, range_task(scan));
-  pairs_.clear();
-  for (size_t k = 0; k < parts; ++k) pairs_.insert(pairs_.end(), part_pairs_[k].begin(), part_pairs_[k].end());
-  tree_.finish_pairs(boxes_, pairs_);
+  // then one sort.
+  collect_pairs();
   const size_t n = pairs_.size();
   stats.candidate_pairs = stats.pair_tests = n;
 

@@ -164,31 +164,31 @@ void WorldTree::relink(uint32_t id, const Coord& lo, const Coord& hi, bool overf
   lo_[id] = lo;
 }
 
-WorldTree::Range WorldTree::range_of(const Aabb& box) const {
+WorldTree::CellRange WorldTree::cell_range(const Aabb& box) const {
   assert(!box.min.hasNaN() && !box.max.hasNaN());
-  Range r{cell_of(box.min), cell_of(box.max), false};
+  CellRange r{cell_of(box.min), cell_of(box.max), false};
   uint64_t count = 1;
   for (int k = 0; k < 3; ++k) count *= uint64_t(r.hi[k]) - r.lo[k] + 1;
   r.overflow = count > kMaxCells;
   return r;
 }
 
-bool WorldTree::needs_update(uint32_t id, const Aabb& box) const {
+bool WorldTree::needs_update(uint32_t id, const CellRange& r) const {
   if (!contains(id)) return true;
-  const Range r = range_of(box);
   const Entry& e = entries_[id];
   return !(same(e.lo, r.lo) && same(e.hi, r.hi) && e.overflow == r.overflow);
 }
 
-bool WorldTree::update(uint32_t id, const Aabb& box) {
+bool WorldTree::update(uint32_t id, const Aabb& box) { return update_cells(id, cell_range(box)); }
+
+bool WorldTree::update_cells(uint32_t id, const CellRange& r) {
   if (id >= entries_.size()) {
     entries_.resize(id + 1);
     lo_.resize(id + 1);
   }
-  const Range r = range_of(box);
   const Entry& e = entries_[id];
   if (e.present) {
-    if (same(e.lo, r.lo) && same(e.hi, r.hi) && e.overflow == r.overflow) return false;
+    if (!needs_update(id, r)) return false;
     ++reinsertions_;
   } else {
     insert_sorted(present_ids_, id);
@@ -237,9 +237,8 @@ constexpr size_t kWordsPerPart = 8;
 // The busy cells, each pair emitted only by its first common cell, then one
 // sort: cheaper than visiting every object's cells in id order. `keep`
 // filters pairs before they are stored and sorted.
-template <class Keep>
-void WorldTree::scan_cells(size_t begin, size_t end, std::vector<std::pair<uint32_t, uint32_t>>& out,
-                           Keep keep) const {
+template <class Keep, class Emit>
+void WorldTree::scan_cells(size_t begin, size_t end, Keep keep, Emit emit) const {
   // The busy cells of one bitmap word at a time, their id lists prefetched a
   // few cells ahead: each list is its own heap block, a cache miss otherwise.
   constexpr int kAhead = 4;
@@ -263,7 +262,7 @@ void WorldTree::scan_cells(size_t begin, size_t end, std::vector<std::pair<uint3
           const uint32_t b = ids[j];
           const Coord& lb = lo_[b];
           if ((ax || cell.at[0] == lb[0]) && (ay || cell.at[1] == lb[1]) && (az || cell.at[2] == lb[2]) && keep(a, b))
-            out.emplace_back(a, b);
+            emit(a, b);
         }
       }
     }
@@ -289,7 +288,7 @@ void WorldTree::finish(std::vector<std::pair<uint32_t, uint32_t>>& out, Keep kee
 void WorldTree::candidate_pairs(std::vector<std::pair<uint32_t, uint32_t>>& out) const {
   const auto all = [](uint32_t, uint32_t) { return true; };
   out.clear();
-  scan_cells(0, busy_.size(), out, all);
+  scan_cells(0, busy_.size(), all, [&](uint32_t a, uint32_t b) { out.emplace_back(a, b); });
   finish(out, all);
 }
 
@@ -306,16 +305,22 @@ struct BoxesOverlap {
 void WorldTree::overlapping_pairs(std::span<const Aabb> boxes, std::vector<std::pair<uint32_t, uint32_t>>& out) const {
   assert(boxes.size() >= entries_.size());
   out.clear();
-  scan_cells(0, busy_.size(), out, BoxesOverlap{boxes});
+  scan_cells(0, busy_.size(), BoxesOverlap{boxes}, [&](uint32_t a, uint32_t b) { out.emplace_back(a, b); });
   finish(out, BoxesOverlap{boxes});
 }
 
 size_t WorldTree::scan_parts() const { return (busy_.size() + kWordsPerPart - 1) / kWordsPerPart; }
 
-void WorldTree::scan_part(size_t part, std::span<const Aabb> boxes, std::vector<std::pair<uint32_t, uint32_t>>& out) const {
+void WorldTree::scan_part(size_t part, std::span<const Aabb> boxes, PairSink& sink) const {
   assert(boxes.size() >= entries_.size());
   const size_t begin = std::min(busy_.size(), part * kWordsPerPart);
-  scan_cells(begin, std::min(busy_.size(), begin + kWordsPerPart), out, BoxesOverlap{boxes});
+  std::array<std::pair<uint32_t, uint32_t>, 256> block;  // handed over when full
+  size_t n = 0;
+  scan_cells(begin, std::min(busy_.size(), begin + kWordsPerPart), BoxesOverlap{boxes}, [&](uint32_t a, uint32_t b) {
+    block[n++] = {a, b};
+    if (n == block.size()) sink.take(block), n = 0;
+  });
+  if (n > 0) sink.take(std::span(block).first(n));
 }
 
 void WorldTree::finish_pairs(std::span<const Aabb> boxes, std::vector<std::pair<uint32_t, uint32_t>>& out) const {

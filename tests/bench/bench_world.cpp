@@ -214,9 +214,16 @@ void BM_Detect(benchmark::State& state) {
   // WorldTree cell the motion reaches and every scratch buffer exist, so the
   // timed frames are the steady state.
   int64_t f = 0;
+  const auto set_poses = [&] {
+    if (batch) {
+      (void)world.set_poses(handles, motion.now);
+    } else {
+      for (size_t i = 0; i < handles.size(); ++i) (void)world.set_pose(handles[i], motion.now[i]);
+    }
+  };
   for (; f < kWarmup; ++f) {
     motion.at(f);
-    for (size_t i = 0; i < handles.size(); ++i) (void)world.set_pose(handles[i], motion.now[i]);
+    set_poses();
     world.set_camera(AppMotion::camera(scene, f));
     world.detect(contacts);
   }
@@ -229,10 +236,7 @@ void BM_Detect(benchmark::State& state) {
     ++f;
     const uint64_t before = g_allocations.load();
     state.ResumeTiming();
-    if (batch)
-      (void)world.set_poses(handles, motion.now);
-    else
-      for (size_t i = 0; i < handles.size(); ++i) (void)world.set_pose(handles[i], motion.now[i]);
+    set_poses();
     world.set_camera(camera);
     const DetectStats d = world.detect(contacts);
     state.PauseTiming();

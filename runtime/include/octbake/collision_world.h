@@ -360,6 +360,7 @@ class OCTBAKE_API CollisionWorld {
   uint64_t refresh_legacy(bool all);
   PlacedTree placed(uint32_t i) const;
   void run_parallel(size_t count, size_t grain, RangeTask task);
+  void collect_pairs();  // pairs_: the WorldTree's overlapping pairs, sorted
   void test_pairs(size_t begin, size_t end);
   // Queries: the nearest leaf of slot i entered within `limit` past t_box
   // (local distance and box); does slot i have a leaf overlapping the box
@@ -397,12 +398,13 @@ class OCTBAKE_API CollisionWorld {
     PairCache cache;  // in: the last frame's proving leaf pair; out: this frame's
     ContactEstimate estimate;  // with test.hit
   };
-  std::vector<std::vector<std::pair<uint32_t, uint32_t>>> part_pairs_;  // per WorldTree scan part
+  std::vector<std::pair<uint32_t, uint32_t>> spilled_pairs_;  // collect_pairs: beyond pairs_'s room
   std::vector<uint32_t> stale_;  // objects in pairs whose depth is stale
   // set_poses / commit_poses scratch: per item, what moved; per slot, the
   // item that claimed it (duplicate check).
   enum : uint8_t { kUnmoved, kMoved, kNewlyDirty };
   std::vector<uint8_t> move_flags_;
+  std::vector<WorldTree::CellRange> ranges_;  // commit_poses: per dirty_ entry
   std::vector<uint32_t> claim_;
   std::vector<PairResult> results_;
   // Temporal coherence: per candidate pair (slots a < b, sorted by key) the

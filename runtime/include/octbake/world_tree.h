@@ -60,17 +60,33 @@ class OCTBAKE_API WorldTree {
   void overlapping_pairs(std::span<const Aabb> boxes, std::vector<std::pair<uint32_t, uint32_t>>& out) const;
 
   // ---- the same work in parallel parts (CollisionWorld runs them on its
-  // executor). These are const and read only, so any number may run at once
-  // while no update() or remove() runs.
-  // Would update(id, box) change anything (a new id, or another cell range)?
-  bool needs_update(uint32_t id, const Aabb& box) const;
+  // executor). The const ones read only, so any number may run at once while
+  // no update(), update_cells() or remove() runs.
+  // The cells update(id, box) would put an object in; update_cells(id, range)
+  // does the same as update(id, box) without computing them again.
+  struct CellRange {
+    std::array<uint16_t, 3> lo{}, hi{};  // inclusive, clamped to the grid
+    bool overflow = false;
+  };
+  CellRange cell_range(const Aabb& box) const;  // `box` must not hold NaN
+  bool update_cells(uint32_t id, const CellRange& range);
+  // Would update_cells(id, range) change anything (a new id, or other cells)?
+  bool needs_update(uint32_t id, const CellRange& range) const;
   // overlapping_pairs in pieces: scan_part(k) for every k < scan_parts()
-  // appends (unsorted) the cell pairs of its share of the cells to its own
-  // vector, every pair in exactly one part; finish_pairs, given the parts'
-  // pairs concatenated in any order, adds the overflow pairs and sorts. The
-  // result equals overlapping_pairs however the parts are run.
+  // hands the cell pairs of its share of the cells to `sink`, in blocks,
+  // every pair in exactly one part; finish_pairs, given all the parts' pairs
+  // in any order, adds the overflow pairs and sorts. The result equals
+  // overlapping_pairs however the parts are run.
+  class PairSink {
+   public:
+    // Called by scan_part, from several threads at once when parts run in parallel.
+    virtual void take(std::span<const std::pair<uint32_t, uint32_t>> pairs) = 0;
+
+   protected:
+    ~PairSink() = default;
+  };
   size_t scan_parts() const;
-  void scan_part(size_t part, std::span<const Aabb> boxes, std::vector<std::pair<uint32_t, uint32_t>>& out) const;
+  void scan_part(size_t part, std::span<const Aabb> boxes, PairSink& sink) const;
   void finish_pairs(std::span<const Aabb> boxes, std::vector<std::pair<uint32_t, uint32_t>>& out) const;
 
   int depth() const { return depth_; }
@@ -142,15 +158,11 @@ class OCTBAKE_API WorldTree {
     std::vector<uint32_t> ids;  // sorted ascending
   };
 
-  struct Range {
-    Coord lo, hi;
-    bool overflow;
-  };
   Coord cell_of(const Eigen::Vector3d& p) const;
-  Range range_of(const Aabb& box) const;
-  // The cell pairs of the busy cells of bitmap words [begin, end), appended.
-  template <class Keep>
-  void scan_cells(size_t begin, size_t end, std::vector<std::pair<uint32_t, uint32_t>>& out, Keep keep) const;
+  // emit(a, b) for the cell pairs of the busy cells of bitmap words
+  // [begin, end) that keep(a, b) accepts.
+  template <class Keep, class Emit>
+  void scan_cells(size_t begin, size_t end, Keep keep, Emit emit) const;
   // Appends the overflow pairs and sorts `out`.
   template <class Keep>
   void finish(std::vector<std::pair<uint32_t, uint32_t>>& out, Keep keep) const;
