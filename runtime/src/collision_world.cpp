@@ -375,6 +375,9 @@ Result<ObjectHandle> CollisionWorld::create(TreeSource source, const Pose& pose)
   }
   Slot& s = slots_[i];
   const uint32_t generation = s.generation + 1 == 0 ? 1 : s.generation + 1;
+  // A slot destroyed since the last commit is still listed: list it once.
+  const bool listed = s.dirty_at < dirty_.size() && dirty_[s.dirty_at] == i;
+  const uint32_t dirty_at = s.dirty_at;
   s = Slot{};
   s.generation = generation;
   s.source = source;
@@ -385,7 +388,10 @@ Result<ObjectHandle> CollisionWorld::create(TreeSource source, const Pose& pose)
   s.offset = world_bounds(place(tree_of(s).bounds(), at_origin));
   place_box(i);
   s.tree_dirty = true;
-  dirty_.push_back(i);
+  if (listed)
+    s.dirty_at = dirty_at;
+  else
+    list_dirty(i);
   cell_changed_[i] = 1;
   any_stale_area_ = true;
   ++live_;
@@ -434,7 +440,7 @@ Status CollisionWorld::set_pose(ObjectHandle h, const Pose& pose) {
   // objects that did not move.
   if (same_pose(pose, slots_[h.slot].pose)) return std::monostate{};
   if (Status st = check_pose(pose); !st) return st;
-  if (move_to(h.slot, pose)) dirty_.push_back(h.slot);
+  if (move_to(h.slot, pose)) list_dirty(h.slot);
   if (settings_.area_refresh == AreaRefresh::on_demand) any_stale_area_ = true;
   return std::monostate{};
 }
@@ -485,7 +491,7 @@ Status CollisionWorld::set_poses(std::span<const ObjectHandle> handles, std::spa
   bool moved = false;
   for (size_t k = 0; k < n; ++k) {
     moved |= move_flags_[k] != kUnmoved;
-    if (move_flags_[k] == kNewlyDirty) dirty_.push_back(handles[k].slot);
+    if (move_flags_[k] == kNewlyDirty) list_dirty(handles[k].slot);
   }
   if (moved && settings_.area_refresh == AreaRefresh::on_demand) any_stale_area_ = true;
   return std::monostate{};
@@ -649,31 +655,31 @@ void CollisionWorld::test_pairs(size_t begin, size_t end) {
   }
 }
 
+void CollisionWorld::list_dirty(uint32_t i) {
+  slots_[i].dirty_at = uint32_t(dirty_.size());
+  dirty_.push_back(i);
+}
+
 void CollisionWorld::commit_poses() {
-  // Which dirty objects changed cells: read only, in parallel. Then the moves
-  // themselves, which share cells, in order. (A slot destroyed and created
-  // again is listed twice; its second entry finds tree_dirty cleared.)
+  // Which dirty objects changed cells, in parallel (dirty_ names each slot
+  // once, see create()); then the moves themselves, which share cells, in order.
   const size_t n = dirty_.size();
   if (move_flags_.size() < n) move_flags_.resize(n);
   if (ranges_.size() < n) ranges_.resize(n);
   const auto check_cells = [&](size_t b, size_t e) {
     for (size_t k = b; k < e; ++k) {
       const uint32_t i = dirty_[k];
-      const Slot& s = slots_[i];
+      Slot& s = slots_[i];
       move_flags_[k] = kUnmoved;
-      if (!s.live || !s.tree_dirty) continue;
+      if (!s.live || !s.tree_dirty) continue;  // destroyed since
+      s.tree_dirty = false;
       ranges_[k] = tree_.cell_range(boxes_[i]);
       if (tree_.needs_update(i, ranges_[k])) move_flags_[k] = kMoved;
     }
   };
   run_parallel(n, kPoseGrain, range_task(check_cells));
-  for (size_t k = 0; k < n; ++k) {
-    const uint32_t i = dirty_[k];
-    Slot& s = slots_[i];
-    if (!s.live || !s.tree_dirty) continue;
-    s.tree_dirty = false;
-    if (move_flags_[k] == kMoved && tree_.update_cells(i, ranges_[k])) cell_changed_[i] = 1;
-  }
+  for (size_t k = 0; k < n; ++k)
+    if (move_flags_[k] == kMoved && tree_.update_cells(dirty_[k], ranges_[k])) cell_changed_[dirty_[k]] = 1;
   dirty_.clear();
 }
 
@@ -1069,7 +1075,7 @@ void CollisionWorld::query_candidates(const Aabb& box) {
   query_ids_.resize(n);
   for (uint32_t i : dirty_)
     if (slots_[i].live && slots_[i].tree_dirty) query_ids_.push_back(i);
-  if (query_ids_.size() > n) {  // dirty_ may name a slot twice
+  if (query_ids_.size() > n) {  // ascending
     std::sort(query_ids_.begin(), query_ids_.end());
     query_ids_.erase(std::unique(query_ids_.begin(), query_ids_.end()), query_ids_.end());
   }

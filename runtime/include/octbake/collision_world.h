@@ -337,6 +337,7 @@ class OCTBAKE_API CollisionWorld {
     uint32_t generation = 0;
     bool live = false;
     bool tree_dirty = false;  // WorldTree not yet moved to `box`
+    uint32_t dirty_at = UINT32_MAX;  // index in dirty_ when last listed
     int depth = 0;
     Pose pose;
     Aabb offset;  // world AABB of the tree at (rotation, scale), relative to the position
@@ -349,6 +350,7 @@ class OCTBAKE_API CollisionWorld {
   const ObjectTree& tree_of(const Slot& s) const;
   int max_depth_of(const Slot& s) const;
   void place_box(uint32_t slot);  // boxes_[slot] from the slot's pose and offset
+  void list_dirty(uint32_t slot);  // appends to dirty_
   // Sets live slot i to a checked pose that differs from its own; true when
   // the slot just became dirty (the caller lists it in dirty_).
   bool move_to(uint32_t i, const Pose& pose);
@@ -384,7 +386,7 @@ class OCTBAKE_API CollisionWorld {
   std::vector<Slot> slots_;
   std::vector<Aabb> boxes_;  // per slot: world AABB (offset + position, padded); hot in the pair loop
   std::vector<uint32_t> free_slots_;  // reused LIFO
-  std::vector<uint32_t> dirty_;       // slots whose WorldTree entry is stale
+  std::vector<uint32_t> dirty_;       // slots whose WorldTree entry is stale, each once
   size_t live_ = 0;
   uint64_t epoch_ = 1;                // bumped by set_camera / set_lod
   bool any_stale_area_ = true;        // thesis: some live area is not fresh
