@@ -534,28 +534,52 @@ template <bool kFirstOnly, class K, class OnLeaf>
     const uint32_t hits = frame.children_overlap(split_a, d, split_a ? e.db : e.da, e.p, octant, count, out);
     result.box_tests += uint64_t(count);
     if (hits == 0) continue;
+    const Coord& grown = split_a ? e.ca : e.cb;
+    const auto child = [&](int c) {
+      const uint8_t j = octant[c];
+      return Coord{uint16_t(2 * grown[0] + (j & 1u)), uint16_t(2 * grown[1] + ((j >> 1) & 1u)),
+                   uint16_t(2 * grown[2] + ((j >> 2) & 1u))};
+    };
+    const auto distance = [&](int c) { return (out[c][0] * out[c][0] + out[c][1] * out[c][1]) + out[c][2] * out[c][2]; };
+    // Children that are leaf pairs (neither side splits further) are reported
+    // here, in the order the stack would pop them: no push, pop or sort for
+    // the first only (just the nearest).
+    const bool leaves = split_a ? e.da + 1 == a.depth && e.db == b.depth : e.db + 1 == b.depth && e.da == a.depth;
+    if (kFirstOnly && leaves) {
+      int best = std::countr_zero(hits);
+      double best_key = distance(best);
+      for (uint32_t rest = hits & (hits - 1); rest != 0; rest &= rest - 1) {
+        const int c = std::countr_zero(rest);
+        const double k = distance(c);
+        if (k < best_key) best = c, best_key = k;  // ties: the lower octant
+      }
+      result.hit = true;
+      split_a ? on_leaf(child(best), e.cb) : on_leaf(e.ca, child(best));
+      return;
+    }
     // Nearest first: sort the overlapping children by centre distance
     // (lanes 0..2 are the offset in A's axes), ties in octant order.
     int order[8];
     double key[8];
     int m = 0;
-    for (int c = 0; c < count; ++c) {
-      if (!(hits & (1u << c))) continue;
-      const double k = (out[c][0] * out[c][0] + out[c][1] * out[c][1]) + out[c][2] * out[c][2];
+    for (uint32_t rest = hits; rest != 0; rest &= rest - 1) {
+      const int c = std::countr_zero(rest);
+      const double k = distance(c);
       int at = m++;
       for (; at > 0 && key[at - 1] > k; --at) order[at] = order[at - 1], key[at] = key[at - 1];
       order[at] = c, key[at] = k;
     }
+    if (leaves) {
+      result.hit = true;
+      for (int s = 0; s < m; ++s) split_a ? on_leaf(child(order[s]), e.cb) : on_leaf(e.ca, child(order[s]));
+      continue;
+    }
     assert(n + size_t(m) <= kStackSize);
     // Pushed farthest first so that the nearest is popped next.
-    const Coord& grown = split_a ? e.ca : e.cb;
     for (int s = m - 1; s >= 0; --s) {
       const int c = order[s];
-      const uint8_t j = octant[c];
-      const Coord coord{uint16_t(2 * grown[0] + (j & 1u)), uint16_t(2 * grown[1] + ((j >> 1) & 1u)),
-                        uint16_t(2 * grown[2] + ((j >> 2) & 1u))};
-      stack[n++] = split_a ? Entry{out[c], first + uint32_t(c), e.ib, coord, e.cb, uint8_t(e.da + 1), e.db}
-                           : Entry{out[c], e.ia, first + uint32_t(c), e.ca, coord, e.da, uint8_t(e.db + 1)};
+      stack[n++] = split_a ? Entry{out[c], first + uint32_t(c), e.ib, child(c), e.cb, uint8_t(e.da + 1), e.db}
+                           : Entry{out[c], e.ia, first + uint32_t(c), e.ca, child(c), e.da, uint8_t(e.db + 1)};
     }
   }
 }
