@@ -236,38 +236,32 @@ using v4d_mem = double __attribute__((vector_size(32), aligned(8), may_alias));
 // A child at depth 1 sits at the root's centre +- q on each axis m of its
 // tree; weights[m] give the effect on the projections (times sign). Octants
 // 7 - j are the negations of octants j (negation is exact).
-[[gnu::always_inline]] inline void fill_offsets(Lanes* offset, const Lanes* weights, const double* q, double sign) {
+[[gnu::always_inline]] inline void fill_offsets(Lanes* offset, const v4d (*weights)[4], const double* q,
+                                                double sign) {
   const double f0 = sign * q[0], f1 = sign * q[1], f2 = sign * q[2];
-  for (int c = 0; c < kLanes; c += 4) {
-    v4d w0, w1, w2;
-    load4(w0, weights[0] + c);
-    load4(w1, weights[1] + c);
-    load4(w2, weights[2] + c);
-    const v4d e0 = w0 * f0, e1 = w1 * f1, e2 = w2 * f2;
+  for (int c = 0; c < 4; ++c) {
+    const v4d e0 = weights[0][c] * f0, e1 = weights[1][c] * f1, e2 = weights[2][c] * f2;
     const v4d s01 = e0 + e1, d01 = e0 - e1;  // +x+y, +x-y
     const v4d o0 = -(s01 + e2), o1 = d01 - e2, o2 = -(d01 + e2), o3 = s01 - e2;
-    store4(offset[0] + c, o0);  // -x-y-z
-    store4(offset[1] + c, o1);  // +x-y-z
-    store4(offset[2] + c, o2);  // -x+y-z
-    store4(offset[3] + c, o3);  // +x+y-z
-    store4(offset[7] + c, -o0);
-    store4(offset[6] + c, -o1);
-    store4(offset[5] + c, -o2);
-    store4(offset[4] + c, -o3);
+    store4(offset[0] + 4 * c, o0);  // -x-y-z
+    store4(offset[1] + 4 * c, o1);  // +x-y-z
+    store4(offset[2] + 4 * c, o2);  // -x+y-z
+    store4(offset[3] + 4 * c, o3);  // +x+y-z
+    store4(offset[7] + 4 * c, -o0);
+    store4(offset[6] + 4 * c, -o1);
+    store4(offset[5] + 4 * c, -o2);
+    store4(offset[4] + 4 * c, -o3);
   }
 }
 
 // Radius of the padded box at depth d: weights . (half / 2^d + pad), as
 // base * 2^-d + padding.
-[[gnu::always_inline]] inline void fill_radii(double* base_out, double* padding_out, const Lanes* weights,
+[[gnu::always_inline]] inline void fill_radii(double* base_out, double* padding_out, const v4d (*weights)[4],
                                               const double* half, double pad) {
-  for (int c = 0; c < kLanes; c += 4) {
-    v4d w0, w1, w2;
-    load4(w0, weights[0] + c);
-    load4(w1, weights[1] + c);
-    load4(w2, weights[2] + c);
-    store4(base_out + c, (w0 * half[0] + w1 * half[1]) + w2 * half[2]);
-    store4(padding_out + c, ((w0 + w1) + w2) * pad);
+  for (int c = 0; c < 4; ++c) {
+    const v4d w0 = weights[0][c], w1 = weights[1][c], w2 = weights[2][c];
+    store4(base_out + 4 * c, (w0 * half[0] + w1 * half[1]) + w2 * half[2]);
+    store4(padding_out + 4 * c, ((w0 + w1) + w2) * pad);
   }
 }
 
@@ -301,35 +295,35 @@ class PairFrame {
       : rel_(a, b), depth_a_(a.depth), depth_b_(b.depth) {
     const Eigen::Matrix3d& r = rel_.r;
     const Eigen::Matrix3d& ar = rel_.abs_r;
-    // abs_w*: weights of A's and B's half extents in the radii (Gottschalk's
-    // formulas, with |R| padded). Every entry is written once (no zero fill:
-    // this runs per pair).
-    Lanes* w = t_.w;
-    alignas(64) Lanes abs_wa[3], abs_wb[3];
-    for (int i = 0; i < 3; ++i)
-      for (int m = 0; m < 3; ++m) {
-        w[m][i] = abs_wa[m][i] = m == i ? 1 : 0;  // A's face i
-        w[m][3 + i] = r(m, i);                    // B's face i
-        abs_wa[m][3 + i] = ar(m, i);
-        abs_wb[m][i] = ar(i, m);
-        abs_wb[m][3 + i] = m == i ? 1 : 0;
-      }
-    for (int i = 0; i < 3; ++i) {  // edge pairs A_i x B_j
-      const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
-      for (int j = 0; j < 3; ++j) {
-        const int k = 6 + 3 * i + j, j1 = (j + 1) % 3, j2 = (j + 2) % 3;
-        w[i][k] = 0;
-        w[i2][k] = r(i1, j);
-        w[i1][k] = -r(i2, j);
-        abs_wa[i][k] = 0;
-        abs_wa[i1][k] = ar(i2, j);
-        abs_wa[i2][k] = ar(i1, j);
-        abs_wb[j][k] = 0;
-        abs_wb[j1][k] = ar(i, j2);
-        abs_wb[j2][k] = ar(i, j1);
-      }
-    }
-    for (int m = 0; m < 3; ++m) w[m][15] = abs_wa[m][15] = abs_wb[m][15] = 0;  // the idle lane
+    // The weights in 4-lane chunks, built in registers (scalar stores read
+    // back as vectors would stall store forwarding). w[m]: weight of t_m in
+    // each projection; aw (bw): weights of A's (B's) half extents in the
+    // radii (Gottschalk's formulas, with |R| padded). Lanes as in the kernel.
+    const auto q = [&](int m, int i) { return r(m, i); };
+    const auto p = [&](int m, int i) { return ar(m, i); };
+    v4d w[3][4];  // assigned one by one: an aggregate initialiser zero-fills first
+    w[0][0] = v4d{1, 0, 0, q(0, 0)}; w[0][1] = v4d{q(0, 1), q(0, 2), 0, 0};
+    w[0][2] = v4d{0, q(2, 0), q(2, 1), q(2, 2)}; w[0][3] = v4d{-q(1, 0), -q(1, 1), -q(1, 2), 0};
+    w[1][0] = v4d{0, 1, 0, q(1, 0)}; w[1][1] = v4d{q(1, 1), q(1, 2), -q(2, 0), -q(2, 1)};
+    w[1][2] = v4d{-q(2, 2), 0, 0, 0}; w[1][3] = v4d{q(0, 0), q(0, 1), q(0, 2), 0};
+    w[2][0] = v4d{0, 0, 1, q(2, 0)}; w[2][1] = v4d{q(2, 1), q(2, 2), q(1, 0), q(1, 1)};
+    w[2][2] = v4d{q(1, 2), -q(0, 0), -q(0, 1), -q(0, 2)}; w[2][3] = v4d{0, 0, 0, 0};
+    v4d aw[3][4];  // assigned one by one: an aggregate initialiser zero-fills first
+    aw[0][0] = v4d{1, 0, 0, p(0, 0)}; aw[0][1] = v4d{p(0, 1), p(0, 2), 0, 0};
+    aw[0][2] = v4d{0, p(2, 0), p(2, 1), p(2, 2)}; aw[0][3] = v4d{p(1, 0), p(1, 1), p(1, 2), 0};
+    aw[1][0] = v4d{0, 1, 0, p(1, 0)}; aw[1][1] = v4d{p(1, 1), p(1, 2), p(2, 0), p(2, 1)};
+    aw[1][2] = v4d{p(2, 2), 0, 0, 0}; aw[1][3] = v4d{p(0, 0), p(0, 1), p(0, 2), 0};
+    aw[2][0] = v4d{0, 0, 1, p(2, 0)}; aw[2][1] = v4d{p(2, 1), p(2, 2), p(1, 0), p(1, 1)};
+    aw[2][2] = v4d{p(1, 2), p(0, 0), p(0, 1), p(0, 2)}; aw[2][3] = v4d{0, 0, 0, 0};
+    v4d bw[3][4];  // assigned one by one: an aggregate initialiser zero-fills first
+    bw[0][0] = v4d{p(0, 0), p(1, 0), p(2, 0), 1}; bw[0][1] = v4d{0, 0, 0, p(0, 2)};
+    bw[0][2] = v4d{p(0, 1), 0, p(1, 2), p(1, 1)}; bw[0][3] = v4d{0, p(2, 2), p(2, 1), 0};
+    bw[1][0] = v4d{p(0, 1), p(1, 1), p(2, 1), 0}; bw[1][1] = v4d{1, 0, p(0, 2), 0};
+    bw[1][2] = v4d{p(0, 0), p(1, 2), 0, p(1, 0)}; bw[1][3] = v4d{p(2, 2), 0, p(2, 0), 0};
+    bw[2][0] = v4d{p(0, 2), p(1, 2), p(2, 2), 0}; bw[2][1] = v4d{0, 1, p(0, 1), p(0, 0)};
+    bw[2][2] = v4d{0, p(1, 1), p(1, 0), 0}; bw[2][3] = v4d{p(2, 1), p(2, 0), 0, 0};
+    for (int m = 0; m < 3; ++m)
+      for (int c = 0; c < 4; ++c) store4(t_.w[m] + 4 * c, w[m][c]);
     const Aabb& ba = a.tree->bounds();
     const Aabb& bb = b.tree->bounds();
     a_min_ = ba.min;
@@ -346,20 +340,15 @@ class PairFrame {
       half_b[i] = 0.5 * rel_.s * b_size_[i];
     }
     // B's local axis j moves its centre by sR e_j in A's frame.
-    alignas(64) Lanes wb[3];
     const Eigen::Matrix3d& sr = rel_.sr;
-    for (int c = 0; c < kLanes; c += 4) {
-      v4d w0, w1, w2;
-      load4(w0, w[0] + c);
-      load4(w1, w[1] + c);
-      load4(w2, w[2] + c);
-      for (int j = 0; j < 3; ++j) store4(wb[j] + c, (w0 * sr(0, j) + w1 * sr(1, j)) + w2 * sr(2, j));
-    }
+    v4d wb[3][4];
+    for (int c = 0; c < 4; ++c)
+      for (int j = 0; j < 3; ++j) wb[j][c] = (w[0][c] * sr(0, j) + w[1][c] * sr(1, j)) + w[2][c] * sr(2, j);
     // t = centre B - centre A: A's child moving by +q moves t by -q.
     fill_offsets(t_.offset_a, w, quarter_a, -1.0);
     fill_offsets(t_.offset_b, wb, quarter_b, 1.0);
-    fill_radii(t_.base_a, t_.padding_a, abs_wa, half_a, rel_.pad);
-    fill_radii(t_.base_b, t_.padding_b, abs_wb, half_b, rel_.pad);
+    fill_radii(t_.base_a, t_.padding_a, aw, half_a, rel_.pad);
+    fill_radii(t_.base_b, t_.padding_b, bw, half_b, rel_.pad);
   }
 
   // Split A rather than B at depths (da, db)? The larger box splits (half
