@@ -46,18 +46,23 @@ Coord from_coord(const BoxCoord& c) { return {uint16_t(c.x), uint16_t(c.y), uint
 Eigen::Vector3d cell_center(const Coord& c) { return {c[0] + 0.5, c[1] + 0.5, c[2] + 0.5}; }
 
 // A total order on placed trees, by content first so that results (and box
-// test counts) do not depend on argument order or on allocation addresses.
+// test counts) do not depend on argument order or on allocation addresses:
+// bounds, depths, scale, position, rotation, compared in turn (the first
+// difference decides; two different trees usually differ in the first value).
 bool goes_first(const PlacedTree& a, const PlacedTree& b) {
-  auto key = [](const PlacedTree& p) {
-    const Aabb& r = p.tree->bounds();
-    const auto& q = p.pose.rotation.coeffs();
-    return std::array<double, 18>{r.min.x(), r.min.y(), r.min.z(), r.max.x(), r.max.y(), r.max.z(),
-                                  double(p.tree->loaded_depth()), double(p.depth), p.pose.scale,
-                                  p.pose.position.x(), p.pose.position.y(), p.pose.position.z(),
-                                  q.x(), q.y(), q.z(), q.w(), 0, 0};
-  };
-  const auto ka = key(a), kb = key(b);
-  if (ka != kb) return ka < kb;
+  const Aabb &ra = a.tree->bounds(), &rb = b.tree->bounds();
+  for (int i = 0; i < 3; ++i)
+    if (ra.min[i] != rb.min[i]) return ra.min[i] < rb.min[i];
+  for (int i = 0; i < 3; ++i)
+    if (ra.max[i] != rb.max[i]) return ra.max[i] < rb.max[i];
+  if (a.tree->loaded_depth() != b.tree->loaded_depth()) return a.tree->loaded_depth() < b.tree->loaded_depth();
+  if (a.depth != b.depth) return a.depth < b.depth;
+  if (a.pose.scale != b.pose.scale) return a.pose.scale < b.pose.scale;
+  for (int i = 0; i < 3; ++i)
+    if (a.pose.position[i] != b.pose.position[i]) return a.pose.position[i] < b.pose.position[i];
+  const auto &qa = a.pose.rotation.coeffs(), &qb = b.pose.rotation.coeffs();  // x, y, z, w
+  for (int i = 0; i < 4; ++i)
+    if (qa[i] != qb[i]) return qa[i] < qb[i];
   return !std::less<const ObjectTree*>{}(b.tree, a.tree);
 }
 
@@ -123,91 +128,93 @@ bool occupied(const ObjectTree& tree, int depth, const BoxCoord& c) {
 // AVX2 and AVX-512. Each lane is one multiplication, one addition, one
 // absolute value and one ordered comparison (no fused multiply-add), so all
 // three give identical bits.
+//
+// Each build is a class whose kernel is inlined into the whole pair test,
+// which is compiled once per build and chosen once per pair (run_pair): no
+// call through a pointer in the descent's inner loop.
 constexpr int kLanes = 16;
 using Lanes = double[kLanes];
 
-using Kernel = uint32_t (*)(const double* parent, const double* ra, const double* rb, const Lanes* offset,
-                            double scale, const uint8_t* octant, int n, Lanes* out);
-
-uint32_t children_overlap_portable(const double* parent, const double* ra, const double* rb, const Lanes* offset,
-                                   double scale, const uint8_t* octant, int n, Lanes* out) {
-  double radius[kLanes];
-  for (int k = 0; k < kLanes; ++k) radius[k] = ra[k] + rb[k];
-  uint32_t overlapping = 0;
-  for (int c = 0; c < n; ++c) {
-    const double* o = offset[octant[c]];
-    bool separated = false;
-    for (int k = 0; k < kLanes; ++k) {
-      out[c][k] = parent[k] + o[k] * scale;
-      separated |= std::abs(out[c][k]) > radius[k];
+struct Portable {
+  [[gnu::always_inline]] static uint32_t children_overlap(const double* parent, const double* ra, const double* rb,
+                                                          const Lanes* offset, double scale, const uint8_t* octant,
+                                                          int n, Lanes* out) {
+    double radius[kLanes];
+    for (int k = 0; k < kLanes; ++k) radius[k] = ra[k] + rb[k];
+    uint32_t overlapping = 0;
+    for (int c = 0; c < n; ++c) {
+      const double* o = offset[octant[c]];
+      bool separated = false;
+      for (int k = 0; k < kLanes; ++k) {
+        out[c][k] = parent[k] + o[k] * scale;
+        separated |= std::abs(out[c][k]) > radius[k];
+      }
+      overlapping |= uint32_t(!separated) << c;
     }
-    overlapping |= uint32_t(!separated) << c;
+    return overlapping;
   }
-  return overlapping;
-}
+};
 
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
 #define OCTBAKE_X86_KERNELS 1
 
-[[gnu::target("avx2")]] uint32_t children_overlap_avx2(const double* parent, const double* ra, const double* rb,
-                                                       const Lanes* offset, double scale, const uint8_t* octant,
-                                                       int n, Lanes* out) {
-  const __m256d s = _mm256_set1_pd(scale);
-  const __m256d not_sign = _mm256_castsi256_pd(_mm256_set1_epi64x(INT64_MAX));  // |x| is one AND
-  __m256d p[4], r[4];
-  for (int k = 0; k < 4; ++k) {
-    p[k] = _mm256_loadu_pd(parent + 4 * k);
-    r[k] = _mm256_add_pd(_mm256_loadu_pd(ra + 4 * k), _mm256_loadu_pd(rb + 4 * k));
-  }
-  uint32_t overlapping = 0;
-  for (int c = 0; c < n; ++c) {
-    const double* o = offset[octant[c]];
-    __m256d separated = _mm256_setzero_pd();
+struct Avx2 {
+  [[gnu::target("avx2")]] static uint32_t children_overlap(const double* parent, const double* ra, const double* rb,
+                                                         const Lanes* offset, double scale, const uint8_t* octant,
+                                                         int n, Lanes* out) {
+    const __m256d s = _mm256_set1_pd(scale);
+    const __m256d not_sign = _mm256_castsi256_pd(_mm256_set1_epi64x(INT64_MAX));  // |x| is one AND
+    __m256d p[4], r[4];
     for (int k = 0; k < 4; ++k) {
-      const __m256d q = _mm256_add_pd(p[k], _mm256_mul_pd(_mm256_loadu_pd(o + 4 * k), s));
-      _mm256_storeu_pd(out[c] + 4 * k, q);
-      separated = _mm256_or_pd(separated, _mm256_cmp_pd(_mm256_and_pd(q, not_sign), r[k], _CMP_GT_OQ));
+      p[k] = _mm256_loadu_pd(parent + 4 * k);
+      r[k] = _mm256_add_pd(_mm256_loadu_pd(ra + 4 * k), _mm256_loadu_pd(rb + 4 * k));
     }
-    overlapping |= uint32_t(_mm256_movemask_pd(separated) == 0) << c;
+    uint32_t overlapping = 0;
+    for (int c = 0; c < n; ++c) {
+      const double* o = offset[octant[c]];
+      __m256d separated = _mm256_setzero_pd();
+      for (int k = 0; k < 4; ++k) {
+        const __m256d q = _mm256_add_pd(p[k], _mm256_mul_pd(_mm256_loadu_pd(o + 4 * k), s));
+        _mm256_storeu_pd(out[c] + 4 * k, q);
+        separated = _mm256_or_pd(separated, _mm256_cmp_pd(_mm256_and_pd(q, not_sign), r[k], _CMP_GT_OQ));
+      }
+      overlapping |= uint32_t(_mm256_movemask_pd(separated) == 0) << c;
+    }
+    return overlapping;
   }
-  return overlapping;
-}
+};
 
-[[gnu::target("avx512f")]] uint32_t children_overlap_avx512(const double* parent, const double* ra, const double* rb,
-                                                            const Lanes* offset, double scale, const uint8_t* octant,
-                                                            int n, Lanes* out) {
-  const __m512d s = _mm512_set1_pd(scale);
-  const __m512d p0 = _mm512_loadu_pd(parent), p1 = _mm512_loadu_pd(parent + 8);
-  const __m512d r0 = _mm512_add_pd(_mm512_loadu_pd(ra), _mm512_loadu_pd(rb));
-  const __m512d r1 = _mm512_add_pd(_mm512_loadu_pd(ra + 8), _mm512_loadu_pd(rb + 8));
-  uint32_t overlapping = 0;
-  for (int c = 0; c < n; ++c) {
-    const double* o = offset[octant[c]];
-    const __m512d q0 = _mm512_add_pd(p0, _mm512_mul_pd(_mm512_loadu_pd(o), s));
-    const __m512d q1 = _mm512_add_pd(p1, _mm512_mul_pd(_mm512_loadu_pd(o + 8), s));
-    _mm512_storeu_pd(out[c], q0);
-    _mm512_storeu_pd(out[c] + 8, q1);
-    const __mmask8 separated = __mmask8(_mm512_cmp_pd_mask(_mm512_abs_pd(q0), r0, _CMP_GT_OQ) |
-                                        _mm512_cmp_pd_mask(_mm512_abs_pd(q1), r1, _CMP_GT_OQ));
-    overlapping |= uint32_t(separated == 0) << c;
+struct Avx512 {
+  [[gnu::target("avx512f")]] static uint32_t children_overlap(
+      const double* parent, const double* ra, const double* rb, const Lanes* offset, double scale,
+      const uint8_t* octant, int n, Lanes* out) {
+    const __m512d s = _mm512_set1_pd(scale);
+    const __m512d p0 = _mm512_loadu_pd(parent), p1 = _mm512_loadu_pd(parent + 8);
+    const __m512d r0 = _mm512_add_pd(_mm512_loadu_pd(ra), _mm512_loadu_pd(rb));
+    const __m512d r1 = _mm512_add_pd(_mm512_loadu_pd(ra + 8), _mm512_loadu_pd(rb + 8));
+    uint32_t overlapping = 0;
+    for (int c = 0; c < n; ++c) {
+      const double* o = offset[octant[c]];
+      const __m512d q0 = _mm512_add_pd(p0, _mm512_mul_pd(_mm512_loadu_pd(o), s));
+      const __m512d q1 = _mm512_add_pd(p1, _mm512_mul_pd(_mm512_loadu_pd(o + 8), s));
+      _mm512_storeu_pd(out[c], q0);
+      _mm512_storeu_pd(out[c] + 8, q1);
+      const __mmask8 separated = __mmask8(_mm512_cmp_pd_mask(_mm512_abs_pd(q0), r0, _CMP_GT_OQ) |
+                                          _mm512_cmp_pd_mask(_mm512_abs_pd(q1), r1, _CMP_GT_OQ));
+      overlapping |= uint32_t(separated == 0) << c;
+    }
+    return overlapping;
   }
-  return overlapping;
-}
+};
 #endif
 
 // ---- Per-pair lane tables -------------------------------------------------
-// Built once per pair test from the relative placement. Plain loops over the
-// 16 lanes, compiled once per ISA (vectorised by the compiler); the same
-// operations in the same order, so every build gives the same bits.
-struct TableInput {
-  Lanes w[3], abs_wa[3], abs_wb[3];  // projection and radius weights (see PairFrame)
-  double sr[3][3];                   // sR, column j = B's local axis j in A's frame
-  double quarter_a[3], quarter_b[3]; // a quarter of each root's size (local units)
-  double half_a[3], half_b[3];       // half of each root's size, B's scaled to A's units
-  double pad;
-};
-
+// Built once per pair test from the relative placement, inside the pair test's
+// build (so at its vector width); the same operations in the same order in
+// every build, so every build gives the same bits.
 struct LaneTables {
+  // w[m][k]: weight of t_m in projection k (p = W t).
+  alignas(64) Lanes w[3];
   // Offsets of the 8 children at depth 1, octant order: at depth d they are
   // these times 2^(1-d), exactly.
   alignas(64) Lanes offset_a[8], offset_b[8];
@@ -229,64 +236,34 @@ using v4d_mem = double __attribute__((vector_size(32), aligned(8), may_alias));
 // A child at depth 1 sits at the root's centre +- q on each axis m of its
 // tree; weights[m] give the effect on the projections (times sign). Octants
 // 7 - j are the negations of octants j (negation is exact).
-[[gnu::always_inline]] inline void fill_offsets(Lanes* offset, const Lanes* weights, const double* q, double sign) {
+[[gnu::always_inline]] inline void fill_offsets(Lanes* offset, const v4d (*weights)[4], const double* q,
+                                                double sign) {
   const double f0 = sign * q[0], f1 = sign * q[1], f2 = sign * q[2];
-  for (int c = 0; c < kLanes; c += 4) {
-    v4d w0, w1, w2;
-    load4(w0, weights[0] + c);
-    load4(w1, weights[1] + c);
-    load4(w2, weights[2] + c);
-    const v4d e0 = w0 * f0, e1 = w1 * f1, e2 = w2 * f2;
+  for (int c = 0; c < 4; ++c) {
+    const v4d e0 = weights[0][c] * f0, e1 = weights[1][c] * f1, e2 = weights[2][c] * f2;
     const v4d s01 = e0 + e1, d01 = e0 - e1;  // +x+y, +x-y
     const v4d o0 = -(s01 + e2), o1 = d01 - e2, o2 = -(d01 + e2), o3 = s01 - e2;
-    store4(offset[0] + c, o0);  // -x-y-z
-    store4(offset[1] + c, o1);  // +x-y-z
-    store4(offset[2] + c, o2);  // -x+y-z
-    store4(offset[3] + c, o3);  // +x+y-z
-    store4(offset[7] + c, -o0);
-    store4(offset[6] + c, -o1);
-    store4(offset[5] + c, -o2);
-    store4(offset[4] + c, -o3);
+    store4(offset[0] + 4 * c, o0);  // -x-y-z
+    store4(offset[1] + 4 * c, o1);  // +x-y-z
+    store4(offset[2] + 4 * c, o2);  // -x+y-z
+    store4(offset[3] + 4 * c, o3);  // +x+y-z
+    store4(offset[7] + 4 * c, -o0);
+    store4(offset[6] + 4 * c, -o1);
+    store4(offset[5] + 4 * c, -o2);
+    store4(offset[4] + 4 * c, -o3);
   }
 }
 
 // Radius of the padded box at depth d: weights . (half / 2^d + pad), as
 // base * 2^-d + padding.
-[[gnu::always_inline]] inline void fill_radii(double* base_out, double* padding_out, const Lanes* weights,
+[[gnu::always_inline]] inline void fill_radii(double* base_out, double* padding_out, const v4d (*weights)[4],
                                               const double* half, double pad) {
-  for (int c = 0; c < kLanes; c += 4) {
-    v4d w0, w1, w2;
-    load4(w0, weights[0] + c);
-    load4(w1, weights[1] + c);
-    load4(w2, weights[2] + c);
-    store4(base_out + c, (w0 * half[0] + w1 * half[1]) + w2 * half[2]);
-    store4(padding_out + c, ((w0 + w1) + w2) * pad);
+  for (int c = 0; c < 4; ++c) {
+    const v4d w0 = weights[0][c], w1 = weights[1][c], w2 = weights[2][c];
+    store4(base_out + 4 * c, (w0 * half[0] + w1 * half[1]) + w2 * half[2]);
+    store4(padding_out + 4 * c, ((w0 + w1) + w2) * pad);
   }
 }
-
-[[gnu::always_inline]] inline void build_tables(const TableInput& in, LaneTables& out) {
-  // B's local axis j moves its centre by sR e_j in A's frame.
-  Lanes wb[3];
-  for (int c = 0; c < kLanes; c += 4) {
-    v4d w0, w1, w2;
-    load4(w0, in.w[0] + c);
-    load4(w1, in.w[1] + c);
-    load4(w2, in.w[2] + c);
-    for (int j = 0; j < 3; ++j) store4(wb[j] + c, (w0 * in.sr[0][j] + w1 * in.sr[1][j]) + w2 * in.sr[2][j]);
-  }
-  // t = centre B - centre A: A's child moving by +q moves t by -q.
-  fill_offsets(out.offset_a, in.w, in.quarter_a, -1.0);
-  fill_offsets(out.offset_b, wb, in.quarter_b, 1.0);
-  fill_radii(out.base_a, out.padding_a, in.abs_wa, in.half_a, in.pad);
-  fill_radii(out.base_b, out.padding_b, in.abs_wb, in.half_b, in.pad);
-}
-
-using Builder = void (*)(const TableInput&, LaneTables&);
-void build_tables_portable(const TableInput& in, LaneTables& out) { build_tables(in, out); }
-#ifdef OCTBAKE_X86_KERNELS
-[[gnu::target("avx2")]] void build_tables_avx2(const TableInput& in, LaneTables& out) { build_tables(in, out); }
-[[gnu::target("avx512f")]] void build_tables_avx512(const TableInput& in, LaneTables& out) { build_tables(in, out); }
-#endif
 
 std::atomic<BoxKernel> chosen_kernel{BoxKernel::best};
 
@@ -308,65 +285,45 @@ bool cpu_has(BoxKernel k) {
   return false;
 }
 
-struct Isa {
-  Kernel kernel;
-  Builder build;
-};
-
-Isa isa_of(BoxKernel k) {
-#ifdef OCTBAKE_X86_KERNELS
-  if (k == BoxKernel::avx512) return {children_overlap_avx512, build_tables_avx512};
-  if (k == BoxKernel::avx2) return {children_overlap_avx2, build_tables_avx2};
-#endif
-  (void)k;
-  return {children_overlap_portable, build_tables_portable};
-}
-
-Isa pick_isa() {
-  static const BoxKernel best = cpu_has(BoxKernel::avx512) ? BoxKernel::avx512
-                                : cpu_has(BoxKernel::avx2) ? BoxKernel::avx2
-                                                           : BoxKernel::portable;
-  const BoxKernel k = chosen_kernel.load(std::memory_order_relaxed);
-  return isa_of(k == BoxKernel::best ? best : k);
-}
-
 // ---- The pair frame --------------------------------------------------------
-// Per pair: the projection matrix W (p = W t), and per depth and tree, lazily,
-// the 16-lane radii and the 8 child offsets of the projections.
+// Per pair: the projection matrix W (p = W t), the child offsets, and per
+// depth and tree, lazily, the 16-lane radii.
+template <class K>
 class PairFrame {
  public:
-  PairFrame(const PlacedTree& a, const PlacedTree& b, const Isa& isa)
-      : rel_(a, b), depth_a_(a.depth), depth_b_(b.depth), kernel_(isa.kernel) {
+  [[gnu::always_inline]] PairFrame(const PlacedTree& a, const PlacedTree& b)
+      : rel_(a, b), depth_a_(a.depth), depth_b_(b.depth) {
     const Eigen::Matrix3d& r = rel_.r;
     const Eigen::Matrix3d& ar = rel_.abs_r;
-    // w[m][k]: weight of t_m in projection k; abs_w*: weights of A's and B's
-    // half extents in the radii (Gottschalk's formulas, with |R| padded).
-    // Every entry is written once (no zero fill: this runs per pair).
-    TableInput& in = in_;
-    for (int i = 0; i < 3; ++i)
-      for (int m = 0; m < 3; ++m) {
-        in.w[m][i] = in.abs_wa[m][i] = m == i ? 1 : 0;  // A's face i
-        in.w[m][3 + i] = r(m, i);                       // B's face i
-        in.abs_wa[m][3 + i] = ar(m, i);
-        in.abs_wb[m][i] = ar(i, m);
-        in.abs_wb[m][3 + i] = m == i ? 1 : 0;
-      }
-    for (int i = 0; i < 3; ++i) {  // edge pairs A_i x B_j
-      const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
-      for (int j = 0; j < 3; ++j) {
-        const int k = 6 + 3 * i + j, j1 = (j + 1) % 3, j2 = (j + 2) % 3;
-        in.w[i][k] = 0;
-        in.w[i2][k] = r(i1, j);
-        in.w[i1][k] = -r(i2, j);
-        in.abs_wa[i][k] = 0;
-        in.abs_wa[i1][k] = ar(i2, j);
-        in.abs_wa[i2][k] = ar(i1, j);
-        in.abs_wb[j][k] = 0;
-        in.abs_wb[j1][k] = ar(i, j2);
-        in.abs_wb[j2][k] = ar(i, j1);
-      }
-    }
-    for (int m = 0; m < 3; ++m) in.w[m][15] = in.abs_wa[m][15] = in.abs_wb[m][15] = 0;  // the idle lane
+    // The weights in 4-lane chunks, built in registers (scalar stores read
+    // back as vectors would stall store forwarding). w[m]: weight of t_m in
+    // each projection; aw (bw): weights of A's (B's) half extents in the
+    // radii (Gottschalk's formulas, with |R| padded). Lanes as in the kernel.
+    const auto q = [&](int m, int i) { return r(m, i); };
+    const auto p = [&](int m, int i) { return ar(m, i); };
+    v4d w[3][4];  // assigned one by one: an aggregate initialiser zero-fills first
+    w[0][0] = v4d{1, 0, 0, q(0, 0)}; w[0][1] = v4d{q(0, 1), q(0, 2), 0, 0};
+    w[0][2] = v4d{0, q(2, 0), q(2, 1), q(2, 2)}; w[0][3] = v4d{-q(1, 0), -q(1, 1), -q(1, 2), 0};
+    w[1][0] = v4d{0, 1, 0, q(1, 0)}; w[1][1] = v4d{q(1, 1), q(1, 2), -q(2, 0), -q(2, 1)};
+    w[1][2] = v4d{-q(2, 2), 0, 0, 0}; w[1][3] = v4d{q(0, 0), q(0, 1), q(0, 2), 0};
+    w[2][0] = v4d{0, 0, 1, q(2, 0)}; w[2][1] = v4d{q(2, 1), q(2, 2), q(1, 0), q(1, 1)};
+    w[2][2] = v4d{q(1, 2), -q(0, 0), -q(0, 1), -q(0, 2)}; w[2][3] = v4d{0, 0, 0, 0};
+    v4d aw[3][4];  // assigned one by one: an aggregate initialiser zero-fills first
+    aw[0][0] = v4d{1, 0, 0, p(0, 0)}; aw[0][1] = v4d{p(0, 1), p(0, 2), 0, 0};
+    aw[0][2] = v4d{0, p(2, 0), p(2, 1), p(2, 2)}; aw[0][3] = v4d{p(1, 0), p(1, 1), p(1, 2), 0};
+    aw[1][0] = v4d{0, 1, 0, p(1, 0)}; aw[1][1] = v4d{p(1, 1), p(1, 2), p(2, 0), p(2, 1)};
+    aw[1][2] = v4d{p(2, 2), 0, 0, 0}; aw[1][3] = v4d{p(0, 0), p(0, 1), p(0, 2), 0};
+    aw[2][0] = v4d{0, 0, 1, p(2, 0)}; aw[2][1] = v4d{p(2, 1), p(2, 2), p(1, 0), p(1, 1)};
+    aw[2][2] = v4d{p(1, 2), p(0, 0), p(0, 1), p(0, 2)}; aw[2][3] = v4d{0, 0, 0, 0};
+    v4d bw[3][4];  // assigned one by one: an aggregate initialiser zero-fills first
+    bw[0][0] = v4d{p(0, 0), p(1, 0), p(2, 0), 1}; bw[0][1] = v4d{0, 0, 0, p(0, 2)};
+    bw[0][2] = v4d{p(0, 1), 0, p(1, 2), p(1, 1)}; bw[0][3] = v4d{0, p(2, 2), p(2, 1), 0};
+    bw[1][0] = v4d{p(0, 1), p(1, 1), p(2, 1), 0}; bw[1][1] = v4d{1, 0, p(0, 2), 0};
+    bw[1][2] = v4d{p(0, 0), p(1, 2), 0, p(1, 0)}; bw[1][3] = v4d{p(2, 2), 0, p(2, 0), 0};
+    bw[2][0] = v4d{p(0, 2), p(1, 2), p(2, 2), 0}; bw[2][1] = v4d{0, 1, p(0, 1), p(0, 0)};
+    bw[2][2] = v4d{0, p(1, 1), p(1, 0), 0}; bw[2][3] = v4d{p(2, 1), p(2, 0), 0, 0};
+    for (int m = 0; m < 3; ++m)
+      for (int c = 0; c < 4; ++c) store4(t_.w[m] + 4 * c, w[m][c]);
     const Aabb& ba = a.tree->bounds();
     const Aabb& bb = b.tree->bounds();
     a_min_ = ba.min;
@@ -375,15 +332,23 @@ class PairFrame {
     b_size_ = bb.max - bb.min;
     size_a_ = (0.5 * a_size_).squaredNorm();
     size_b_ = (0.5 * rel_.s * b_size_).squaredNorm();
+    double quarter_a[3], quarter_b[3], half_a[3], half_b[3];
     for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < 3; ++j) in.sr[i][j] = rel_.sr(i, j);
-      in.quarter_a[i] = 0.25 * a_size_[i];
-      in.quarter_b[i] = 0.25 * b_size_[i];
-      in.half_a[i] = 0.5 * a_size_[i];
-      in.half_b[i] = 0.5 * rel_.s * b_size_[i];
+      quarter_a[i] = 0.25 * a_size_[i];
+      quarter_b[i] = 0.25 * b_size_[i];
+      half_a[i] = 0.5 * a_size_[i];
+      half_b[i] = 0.5 * rel_.s * b_size_[i];
     }
-    in.pad = rel_.pad;
-    isa.build(in, t_);
+    // B's local axis j moves its centre by sR e_j in A's frame.
+    const Eigen::Matrix3d& sr = rel_.sr;
+    v4d wb[3][4];
+    for (int c = 0; c < 4; ++c)
+      for (int j = 0; j < 3; ++j) wb[j][c] = (w[0][c] * sr(0, j) + w[1][c] * sr(1, j)) + w[2][c] * sr(2, j);
+    // t = centre B - centre A: A's child moving by +q moves t by -q.
+    fill_offsets(t_.offset_a, w, quarter_a, -1.0);
+    fill_offsets(t_.offset_b, wb, quarter_b, 1.0);
+    fill_radii(t_.base_a, t_.padding_a, aw, half_a, rel_.pad);
+    fill_radii(t_.base_b, t_.padding_b, bw, half_b, rel_.pad);
   }
 
   // Split A rather than B at depths (da, db)? The larger box splits (half
@@ -399,13 +364,14 @@ class PairFrame {
     const Eigen::Vector3d qa = a_min_ + kHalfPow[da] * a_size_.cwiseProduct(cell_center(ca));
     const Eigen::Vector3d qb = b_min_ + kHalfPow[db] * b_size_.cwiseProduct(cell_center(cb));
     const Eigen::Vector3d t = (rel_.t + rel_.sr * qb) - qa;
-    const Lanes* w = in_.w;
+    const Lanes* w = t_.w;
     for (int k = 0; k < kLanes; ++k) p[k] = (w[0][k] * t[0] + w[1][k] * t[1]) + w[2][k] * t[2];
   }
 
   bool overlap(const double* p, int da, int db) const {
+    const double *ra = radius_a(da), *rb = radius_b(db);
     bool separated = false;
-    for (int k = 0; k < kLanes; ++k) separated |= std::abs(p[k]) > radius_a(da)[k] + radius_b(db)[k];
+    for (int k = 0; k < kLanes; ++k) separated |= std::abs(p[k]) > ra[k] + rb[k];
     return !separated;
   }
 
@@ -418,21 +384,27 @@ class PairFrame {
 
   // Test the children of A's box (split_a) or B's box at depth d against the
   // other box at its depth `other`: see children_overlap.
-  uint32_t children_overlap(bool split_a, int d, int other, const double* parent, const uint8_t* octant, int n,
-                            Lanes* out) const {
+  [[gnu::always_inline]] uint32_t children_overlap(bool split_a, int d, int other, const double* parent,
+                                                   const uint8_t* octant, int n, Lanes* out) const {
     const double scale = kHalfPow[d];  // children at depth d + 1
-    return split_a ? kernel_(parent, radius_a(d + 1), radius_b(other), t_.offset_a, scale, octant, n, out)
-                   : kernel_(parent, radius_a(other), radius_b(d + 1), t_.offset_b, scale, octant, n, out);
+    return split_a ? K::children_overlap(parent, radius_a(d + 1), radius_b(other), t_.offset_a, scale, octant, n, out)
+                   : K::children_overlap(parent, radius_a(other), radius_b(d + 1), t_.offset_b, scale, octant, n, out);
   }
 
  private:
   // The 16-lane radii of A's (B's) boxes at depth d, filled on first use.
   const double* radius_a(int d) const { return radius(d, t_.base_a, t_.padding_a, radius_a_, filled_a_); }
   const double* radius_b(int d) const { return radius(d, t_.base_b, t_.padding_b, radius_b_, filled_b_); }
-  static const double* radius(int d, const double* base, const double* padding, Lanes* table, uint32_t& filled) {
-    if (!(filled & (1u << d))) {
+  [[gnu::always_inline]] static const double* radius(int d, const double* base, const double* padding, Lanes* table,
+                                                     uint32_t& filled) {
+    if (!(filled & (1u << d))) [[unlikely]] {
       const double h = kHalfPow[d];
-      for (int k = 0; k < kLanes; ++k) table[d][k] = base[k] * h + padding[k];
+      for (int k = 0; k < kLanes; k += 4) {
+        v4d bk, pk;
+        load4(bk, base + k);
+        load4(pk, padding + k);
+        store4(table[d] + k, bk * h + pk);
+      }
       filled |= 1u << d;
     }
     return table[d];
@@ -446,8 +418,6 @@ class PairFrame {
 
   Relative rel_;
   int depth_a_, depth_b_;
-  Kernel kernel_;
-  TableInput in_;  // kept for its projection weights w
   Eigen::Vector3d a_min_, b_min_, a_size_, b_size_;  // root sizes
   double size_a_, size_b_;                          // squared root half diagonals, A's units
   LaneTables t_;
@@ -499,8 +469,9 @@ bool some_leaf(const ObjectTree& tree, int depth, int d, uint32_t index, const C
 
 // Depth-first descent in canonical order, calling on_leaf(a's leaf, b's
 // leaf) for each overlapping leaf pair: only the first if kFirstOnly.
-template <bool kFirstOnly, class OnLeaf>
-void descend(const PairFrame& frame, const PlacedTree& a, const PlacedTree& b, PairTest& result, OnLeaf on_leaf) {
+template <bool kFirstOnly, class K, class OnLeaf>
+[[gnu::always_inline]] inline void descend(const PairFrame<K>& frame, const PlacedTree& a, const PlacedTree& b,
+                                           PairTest& result, OnLeaf on_leaf) {
   // The children of a pair at path level L = da + db write their projections
   // to pool[L]: depth first, every pair of level L + 1 waiting on the stack
   // was made by the one expansion at level L still open, so nothing there is
@@ -512,6 +483,10 @@ void descend(const PairFrame& frame, const PlacedTree& a, const PlacedTree& b, P
   frame.project({0, 0, 0}, 0, {0, 0, 0}, 0, root_p);
   ++result.box_tests;
   if (!frame.overlap(root_p, 0, 0)) return;
+  // The child masks of every depth of both trees, looked up once.
+  const uint8_t* masks[2][kMaxDepth];
+  for (int d = 0; d < a.depth; ++d) masks[0][d] = a.tree->masks().masks[size_t(d)].data();
+  for (int d = 0; d < b.depth; ++d) masks[1][d] = b.tree->masks().masks[size_t(d)].data();
   stack[n++] = Entry{root_p, 0, 0, {0, 0, 0}, {0, 0, 0}, 0, 0};
   while (n > 0) {
     // Field by field: a block copy would reload the pushed fields in wider
@@ -540,7 +515,7 @@ void descend(const PairFrame& frame, const PlacedTree& a, const PlacedTree& b, P
         return;
       }
     }
-    const uint8_t mask = tree.mask(d, index);
+    const uint8_t mask = masks[split_a ? 0 : 1][d][index];
     const uint32_t first = tree.first_child(d, index);
     const int count = kOctants.count[mask];
     const uint8_t* octant = kOctants.octant[mask];
@@ -548,28 +523,52 @@ void descend(const PairFrame& frame, const PlacedTree& a, const PlacedTree& b, P
     const uint32_t hits = frame.children_overlap(split_a, d, split_a ? e.db : e.da, e.p, octant, count, out);
     result.box_tests += uint64_t(count);
     if (hits == 0) continue;
+    const Coord& grown = split_a ? e.ca : e.cb;
+    const auto child = [&](int c) {
+      const uint8_t j = octant[c];
+      return Coord{uint16_t(2 * grown[0] + (j & 1u)), uint16_t(2 * grown[1] + ((j >> 1) & 1u)),
+                   uint16_t(2 * grown[2] + ((j >> 2) & 1u))};
+    };
+    const auto distance = [&](int c) { return (out[c][0] * out[c][0] + out[c][1] * out[c][1]) + out[c][2] * out[c][2]; };
+    // Children that are leaf pairs (neither side splits further) are reported
+    // here, in the order the stack would pop them: no push, pop or sort for
+    // the first only (just the nearest).
+    const bool leaves = split_a ? e.da + 1 == a.depth && e.db == b.depth : e.db + 1 == b.depth && e.da == a.depth;
+    if (kFirstOnly && leaves) {
+      int best = std::countr_zero(hits);
+      double best_key = distance(best);
+      for (uint32_t rest = hits & (hits - 1); rest != 0; rest &= rest - 1) {
+        const int c = std::countr_zero(rest);
+        const double k = distance(c);
+        if (k < best_key) best = c, best_key = k;  // ties: the lower octant
+      }
+      result.hit = true;
+      split_a ? on_leaf(child(best), e.cb) : on_leaf(e.ca, child(best));
+      return;
+    }
     // Nearest first: sort the overlapping children by centre distance
     // (lanes 0..2 are the offset in A's axes), ties in octant order.
     int order[8];
     double key[8];
     int m = 0;
-    for (int c = 0; c < count; ++c) {
-      if (!(hits & (1u << c))) continue;
-      const double k = (out[c][0] * out[c][0] + out[c][1] * out[c][1]) + out[c][2] * out[c][2];
+    for (uint32_t rest = hits; rest != 0; rest &= rest - 1) {
+      const int c = std::countr_zero(rest);
+      const double k = distance(c);
       int at = m++;
       for (; at > 0 && key[at - 1] > k; --at) order[at] = order[at - 1], key[at] = key[at - 1];
       order[at] = c, key[at] = k;
     }
+    if (leaves) {
+      result.hit = true;
+      for (int s = 0; s < m; ++s) split_a ? on_leaf(child(order[s]), e.cb) : on_leaf(e.ca, child(order[s]));
+      continue;
+    }
     assert(n + size_t(m) <= kStackSize);
     // Pushed farthest first so that the nearest is popped next.
-    const Coord& grown = split_a ? e.ca : e.cb;
     for (int s = m - 1; s >= 0; --s) {
       const int c = order[s];
-      const uint8_t j = octant[c];
-      const Coord coord{uint16_t(2 * grown[0] + (j & 1u)), uint16_t(2 * grown[1] + ((j >> 1) & 1u)),
-                        uint16_t(2 * grown[2] + ((j >> 2) & 1u))};
-      stack[n++] = split_a ? Entry{out[c], first + uint32_t(c), e.ib, coord, e.cb, uint8_t(e.da + 1), e.db}
-                           : Entry{out[c], e.ia, first + uint32_t(c), e.ca, coord, e.da, uint8_t(e.db + 1)};
+      stack[n++] = split_a ? Entry{out[c], first + uint32_t(c), e.ib, child(c), e.cb, uint8_t(e.da + 1), e.db}
+                           : Entry{out[c], e.ia, first + uint32_t(c), e.ca, child(c), e.da, uint8_t(e.db + 1)};
     }
   }
 }
@@ -587,27 +586,66 @@ struct Canonical {
   }
 };
 
-// collide() with an optional leaf pair (in the caller's order) to try first.
-PairTest collide_with_hint(const PlacedTree& a, const PlacedTree& b, const LeafPair* hint) {
-  check(a);
-  check(b);
-  const Canonical pair(a, b);
-  const PairFrame frame(pair.first, pair.second, pick_isa());
+// One pair test: collide() with an optional leaf pair (in the caller's order)
+// to try first, or collide_all() if `all` is given.
+struct Job {
+  const Canonical& pair;
+  const LeafPair* hint;
+  std::vector<LeafPair>* all;
+};
+
+template <class K>
+[[gnu::always_inline]] inline PairTest run_pair(const Job& job) {
+  const Canonical& pair = job.pair;
+  const PairFrame<K> frame(pair.first, pair.second);
   PairTest result;
-  if (hint) {
-    const Coord c1 = from_coord(pair.swapped ? hint->b : hint->a), c2 = from_coord(pair.swapped ? hint->a : hint->b);
+  if (job.all) {
+    descend<false>(frame, pair.first, pair.second, result,
+                   [&](const Coord& ca, const Coord& cb) { job.all->push_back(pair.to_caller(ca, cb)); });
+    return result;
+  }
+  if (job.hint) {
+    const LeafPair& hint = *job.hint;
+    const Coord c1 = from_coord(pair.swapped ? hint.b : hint.a), c2 = from_coord(pair.swapped ? hint.a : hint.b);
     Lanes p;
     frame.project(c1, pair.first.depth, c2, pair.second.depth, p);
     ++result.box_tests;
     if (frame.overlap(p, pair.first.depth, pair.second.depth)) {
       result.hit = true;
-      result.leaf = *hint;
+      result.leaf = hint;
       return result;
     }
   }
   descend<true>(frame, pair.first, pair.second, result,
                 [&](const Coord& ca, const Coord& cb) { result.leaf = pair.to_caller(ca, cb); });
   return result;
+}
+
+using Runner = PairTest (*)(const Job&);
+PairTest run_portable(const Job& job) { return run_pair<Portable>(job); }
+#ifdef OCTBAKE_X86_KERNELS
+[[gnu::target("avx2"), gnu::flatten]] PairTest run_avx2(const Job& job) { return run_pair<Avx2>(job); }
+[[gnu::target("avx512f"), gnu::flatten]] PairTest run_avx512(const Job& job) { return run_pair<Avx512>(job); }
+#endif
+
+Runner runner_of(BoxKernel k) {
+#ifdef OCTBAKE_X86_KERNELS
+  if (k == BoxKernel::avx512) return run_avx512;
+  if (k == BoxKernel::avx2) return run_avx2;
+#endif
+  (void)k;
+  return run_portable;
+}
+
+PairTest run(const PlacedTree& a, const PlacedTree& b, const LeafPair* hint, std::vector<LeafPair>* all) {
+  check(a);
+  check(b);
+  static const BoxKernel best = cpu_has(BoxKernel::avx512) ? BoxKernel::avx512
+                                : cpu_has(BoxKernel::avx2) ? BoxKernel::avx2
+                                                           : BoxKernel::portable;
+  const BoxKernel k = chosen_kernel.load(std::memory_order_relaxed);
+  const Canonical pair(a, b);
+  return runner_of(k == BoxKernel::best ? best : k)(Job{pair, hint, all});
 }
 
 }  // namespace
@@ -618,13 +656,13 @@ bool use_box_kernel(BoxKernel kernel) {
   return true;
 }
 
-PairTest collide(const PlacedTree& a, const PlacedTree& b) { return collide_with_hint(a, b, nullptr); }
+PairTest collide(const PlacedTree& a, const PlacedTree& b) { return run(a, b, nullptr, nullptr); }
 
 PairTest collide(const PlacedTree& a, const PlacedTree& b, PairCache& cache) {
   const bool usable = cache.tree_a != nullptr && cache.tree_a == a.tree && cache.tree_b == b.tree &&
                       cache.depth_a == a.depth && cache.depth_b == b.depth &&
                       occupied(*a.tree, a.depth, cache.leaf.a) && occupied(*b.tree, b.depth, cache.leaf.b);
-  const PairTest result = collide_with_hint(a, b, usable ? &cache.leaf : nullptr);
+  const PairTest result = run(a, b, usable ? &cache.leaf : nullptr, nullptr);
   cache = result.hit ? PairCache{a.tree, b.tree, a.depth, b.depth, result.leaf} : PairCache{};
   return result;
 }
@@ -634,14 +672,7 @@ OrientedBox leaf_box(const PlacedTree& p, const BoxCoord& c) {
 }
 
 PairTest collide_all(const PlacedTree& a, const PlacedTree& b, std::vector<LeafPair>& out) {
-  check(a);
-  check(b);
-  const Canonical pair(a, b);
-  const PairFrame frame(pair.first, pair.second, pick_isa());
-  PairTest result;
-  descend<false>(frame, pair.first, pair.second, result,
-                 [&](const Coord& ca, const Coord& cb) { out.push_back(pair.to_caller(ca, cb)); });
-  return result;
+  return run(a, b, nullptr, &out);
 }
 
 // ---- Reference descent -----------------------------------------------------

@@ -10,7 +10,9 @@
 // the other box in one go, and the overlapping ones are visited nearest first
 // (distance between box centres), depth first, with full backtracking. The
 // first overlapping leaf pair ends the descent (early out): that pair proves
-// the hit and is reported. So a small object against a large one walks down
+// the hit and is reported (children that are leaf pairs are reported where
+// they are tested, in the same nearest-first order, without being pushed).
+// So a small object against a large one walks down
 // the large tree first, and the pairs most likely to touch are tried first.
 // One more early out: when the other box is already a leaf and holds the box
 // about to split whole (with a margin of one pad), any occupied leaf below
@@ -25,7 +27,9 @@
 // precomputed per depth for the pair. A box pair carries its 15 projections
 // (16 lanes, one idle); testing a child is 16 additions, absolute values and
 // comparisons against precomputed radii (double precision; AVX-512 or AVX2
-// where the CPU has them, plain C++ otherwise; all give identical bits).
+// where the CPU has them, plain C++ otherwise; all give identical bits). The
+// whole pair test is compiled once per ISA with its kernel inlined and the
+// build is chosen once per pair.
 //
 // Why it is conservative. If the meshes touch at a point x, x lies in an
 // occupied leaf box of each tree (the occupancy is conservative) and so in
