@@ -376,8 +376,7 @@ Result<ObjectHandle> CollisionWorld::create(TreeSource source, const Pose& pose)
   Slot& s = slots_[i];
   const uint32_t generation = s.generation + 1 == 0 ? 1 : s.generation + 1;
   // A slot destroyed since the last commit is still listed: list it once.
-  const bool listed = s.dirty_at < dirty_.size() && dirty_[s.dirty_at] == i;
-  const uint32_t dirty_at = s.dirty_at;
+  const bool listed = s.listed;
   s = Slot{};
   s.generation = generation;
   s.source = source;
@@ -387,11 +386,8 @@ Result<ObjectHandle> CollisionWorld::create(TreeSource source, const Pose& pose)
   at_origin.position.setZero();
   s.offset = world_bounds(place(tree_of(s).bounds(), at_origin));
   place_box(i);
-  s.tree_dirty = true;
-  if (listed)
-    s.dirty_at = dirty_at;
-  else
-    list_dirty(i);
+  s.tree_dirty = s.listed = true;
+  if (!listed) dirty_.push_back(i);
   cell_changed_[i] = 1;
   any_stale_area_ = true;
   ++live_;
@@ -431,7 +427,10 @@ bool CollisionWorld::move_to(uint32_t i, const Pose& pose) {
   s.pose = pose;
   place_box(i);
   if (settings_.area_refresh == AreaRefresh::on_demand) s.area_epoch = 0;
-  return !std::exchange(s.tree_dirty, true);
+  if (s.tree_dirty) return false;
+  // A live slot that is not dirty was committed, so it is not listed.
+  s.tree_dirty = s.listed = true;
+  return true;
 }
 
 Status CollisionWorld::set_pose(ObjectHandle h, const Pose& pose) {
@@ -440,7 +439,7 @@ Status CollisionWorld::set_pose(ObjectHandle h, const Pose& pose) {
   // objects that did not move.
   if (same_pose(pose, slots_[h.slot].pose)) return std::monostate{};
   if (Status st = check_pose(pose); !st) return st;
-  if (move_to(h.slot, pose)) list_dirty(h.slot);
+  if (move_to(h.slot, pose)) dirty_.push_back(h.slot);
   if (settings_.area_refresh == AreaRefresh::on_demand) any_stale_area_ = true;
   return std::monostate{};
 }
@@ -491,7 +490,7 @@ Status CollisionWorld::set_poses(std::span<const ObjectHandle> handles, std::spa
   bool moved = false;
   for (size_t k = 0; k < n; ++k) {
     moved |= move_flags_[k] != kUnmoved;
-    if (move_flags_[k] == kNewlyDirty) list_dirty(handles[k].slot);
+    if (move_flags_[k] == kNewlyDirty) dirty_.push_back(handles[k].slot);
   }
   if (moved && settings_.area_refresh == AreaRefresh::on_demand) any_stale_area_ = true;
   return std::monostate{};
@@ -655,11 +654,6 @@ void CollisionWorld::test_pairs(size_t begin, size_t end) {
   }
 }
 
-void CollisionWorld::list_dirty(uint32_t i) {
-  slots_[i].dirty_at = uint32_t(dirty_.size());
-  dirty_.push_back(i);
-}
-
 void CollisionWorld::commit_poses() {
   // Which dirty objects changed cells, in parallel (dirty_ names each slot
   // once, see create()); then the moves themselves, which share cells, in order.
@@ -671,6 +665,7 @@ void CollisionWorld::commit_poses() {
       const uint32_t i = dirty_[k];
       Slot& s = slots_[i];
       move_flags_[k] = kUnmoved;
+      s.listed = false;
       if (!s.live || !s.tree_dirty) continue;  // destroyed since
       s.tree_dirty = false;
       ranges_[k] = tree_.cell_range(boxes_[i]);

@@ -337,7 +337,7 @@ class OCTBAKE_API CollisionWorld {
     uint32_t generation = 0;
     bool live = false;
     bool tree_dirty = false;  // WorldTree not yet moved to `box`
-    uint32_t dirty_at = UINT32_MAX;  // index in dirty_ when last listed
+    bool listed = false;      // in dirty_ (also after a destroy, until the next commit)
     int depth = 0;
     Pose pose;
     Aabb offset;  // world AABB of the tree at (rotation, scale), relative to the position
@@ -350,7 +350,6 @@ class OCTBAKE_API CollisionWorld {
   const ObjectTree& tree_of(const Slot& s) const;
   int max_depth_of(const Slot& s) const;
   void place_box(uint32_t slot);  // boxes_[slot] from the slot's pose and offset
-  void list_dirty(uint32_t slot);  // appends to dirty_
   // Sets live slot i to a checked pose that differs from its own; true when
   // the slot just became dirty (the caller lists it in dirty_).
   bool move_to(uint32_t i, const Pose& pose);
