@@ -408,18 +408,20 @@ Status CollisionWorld::destroy(ObjectHandle h) {
 
 namespace {
 
-// Bitwise the same pose: set_pose is then a no-op (the stored pose was checked).
-bool same_pose(const Pose& a, const Pose& b) {
-  return same_bits(a.rotation.coeffs(), b.rotation.coeffs()) && same_bits(a.scale, b.scale) &&
-         same_bits(a.position, b.position);
+// Bitwise the same rotation and scale: the offset box stays.
+bool same_frame_of(const Pose& a, const Pose& b) {
+  return same_bits(a.rotation.coeffs(), b.rotation.coeffs()) && same_bits(a.scale, b.scale);
 }
+// Bitwise the same pose: set_pose is then a no-op (the stored pose was checked).
+bool same_pose(const Pose& a, const Pose& b) { return same_frame_of(a, b) && same_bits(a.position, b.position); }
 
 }  // namespace
 
-bool CollisionWorld::move_to(uint32_t i, const Pose& pose) {
+// Inlined: set_pose runs it for every moved object.
+[[gnu::always_inline]] inline bool CollisionWorld::move_to(uint32_t i, const Pose& pose, bool same_frame) {
   Slot& s = slots_[i];
   // Cheap when only the position changed: the offset box stays.
-  if (!same_bits(pose.rotation.coeffs(), s.pose.rotation.coeffs()) || !same_bits(pose.scale, s.pose.scale)) {
+  if (!same_frame) {
     Pose at_origin = pose;
     at_origin.position.setZero();
     s.offset = world_bounds(place(tree_of(s).bounds(), at_origin));
@@ -437,9 +439,11 @@ Status CollisionWorld::set_pose(ObjectHandle h, const Pose& pose) {
   if (Status st = check(h); !st) return st;
   // An app that sets every pose every frame pays almost nothing for the
   // objects that did not move.
-  if (same_pose(pose, slots_[h.slot].pose)) return std::monostate{};
+  const Pose& now = slots_[h.slot].pose;
+  const bool same_frame = same_frame_of(pose, now);
+  if (same_frame && same_bits(pose.position, now.position)) return std::monostate{};
   if (Status st = check_pose(pose); !st) return st;
-  if (move_to(h.slot, pose)) dirty_.push_back(h.slot);
+  if (move_to(h.slot, pose, same_frame)) dirty_.push_back(h.slot);
   if (settings_.area_refresh == AreaRefresh::on_demand) any_stale_area_ = true;
   return std::monostate{};
 }
@@ -483,7 +487,10 @@ Status CollisionWorld::set_poses(std::span<const ObjectHandle> handles, std::spa
   const auto move_items = [&](size_t b, size_t e) {
     for (size_t k = b; k < e; ++k) {
       const uint32_t i = handles[k].slot;
-      move_flags_[k] = same_pose(poses[k], slots_[i].pose) ? kUnmoved : move_to(i, poses[k]) ? kNewlyDirty : kMoved;
+      const bool same_frame = same_frame_of(poses[k], slots_[i].pose);
+      move_flags_[k] = same_frame && same_bits(poses[k].position, slots_[i].pose.position) ? kUnmoved
+                       : move_to(i, poses[k], same_frame)                                  ? kNewlyDirty
+                                                                                            : kMoved;
     }
   };
   run_parallel(n, kPoseGrain, range_task(move_items));

@@ -31,30 +31,12 @@ WorldTree::WorldTree(const Aabb& world, int depth) : world_(world), depth_(depth
   inv_cell_ = Eigen::Vector3d::Constant(double(side_)).cwiseQuotient(world.max - world.min);
 }
 
-// Monotone in p on every axis (subtraction and multiplication by a positive
-// constant round monotonically, and clamping keeps order), so two boxes
-// overlapping on an axis always share a cell on it, inside the world or not:
-// the broadphase never misses a pair.
-WorldTree::Coord WorldTree::cell_of(const Eigen::Vector3d& p) const {
-  Coord c;
-  for (int k = 0; k < 3; ++k) {
-    const double t = (p[k] - world_.min[k]) * inv_cell_[k];
-    c[k] = t >= double(side_) ? uint16_t(side_ - 1) : t > 0 ? uint16_t(t) : uint16_t(0);
-  }
-  return c;
-}
-
 namespace {
 
 uint32_t pack(const std::array<uint16_t, 3>& c) { return uint32_t(c[0]) | (uint32_t(c[1]) << 10) | (uint32_t(c[2]) << 20); }
 
 // Fibonacci hashing of the packed coordinate into the table.
 size_t home(uint32_t key, size_t mask) { return size_t((key * 0x9E3779B97F4A7C15ull) >> 32) & mask; }
-
-// Element-wise: operator== on the arrays was a memcmp call per update.
-bool same(const std::array<uint16_t, 3>& a, const std::array<uint16_t, 3>& b) {
-  return a[0] == b[0] && a[1] == b[1] && a[2] == b[2];
-}
 
 bool inside(const std::array<uint16_t, 3>& c, const std::array<uint16_t, 3>& lo, const std::array<uint16_t, 3>& hi) {
   for (int k = 0; k < 3; ++k)
@@ -162,21 +144,6 @@ void WorldTree::relink(uint32_t id, const Coord& lo, const Coord& hi, bool overf
   e.overflow = overflow;
   e.present = true;
   lo_[id] = lo;
-}
-
-WorldTree::CellRange WorldTree::cell_range(const Aabb& box) const {
-  assert(!box.min.hasNaN() && !box.max.hasNaN());
-  CellRange r{cell_of(box.min), cell_of(box.max), false};
-  uint64_t count = 1;
-  for (int k = 0; k < 3; ++k) count *= uint64_t(r.hi[k]) - r.lo[k] + 1;
-  r.overflow = count > kMaxCells;
-  return r;
-}
-
-bool WorldTree::needs_update(uint32_t id, const CellRange& r) const {
-  if (!contains(id)) return true;
-  const Entry& e = entries_[id];
-  return !(same(e.lo, r.lo) && same(e.hi, r.hi) && e.overflow == r.overflow);
 }
 
 bool WorldTree::update(uint32_t id, const Aabb& box) { return update_cells(id, cell_range(box)); }
@@ -314,7 +281,7 @@ size_t WorldTree::scan_parts() const { return (busy_.size() + kWordsPerPart - 1)
 void WorldTree::scan_part(size_t part, std::span<const Aabb> boxes, PairSink& sink) const {
   assert(boxes.size() >= entries_.size());
   const size_t begin = std::min(busy_.size(), part * kWordsPerPart);
-  std::array<std::pair<uint32_t, uint32_t>, 256> block;  // handed over when full
+  std::array<std::pair<uint32_t, uint32_t>, 32> block;  // handed over when full (small: pairs zero-initialise)
   size_t n = 0;
   scan_cells(begin, std::min(busy_.size(), begin + kWordsPerPart), BoxesOverlap{boxes}, [&](uint32_t a, uint32_t b) {
     block[n++] = {a, b};

@@ -352,7 +352,7 @@ class OCTBAKE_API CollisionWorld {
   void place_box(uint32_t slot);  // boxes_[slot] from the slot's pose and offset
   // Sets live slot i to a checked pose that differs from its own; true when
   // the slot just became dirty (the caller lists it in dirty_).
-  bool move_to(uint32_t i, const Pose& pose);
+  bool move_to(uint32_t i, const Pose& pose, bool same_frame);  // same_frame: rotation and scale unchanged
   Status first_pose_error(std::span<const ObjectHandle> handles, std::span<const Pose> poses) const;
   void invalidate_all_areas();
   // Makes the area and depth of slot i current; returns areas computed.

@@ -199,4 +199,35 @@ class OCTBAKE_API WorldTree {
   mutable std::vector<std::pair<uint32_t, uint32_t>> sort_scratch_;  // candidate_pairs' radix sort
 };
 
+// Inline: commit_poses runs these once per moved object.
+
+// Monotone in p on every axis (subtraction and multiplication by a positive
+// constant round monotonically, and clamping keeps order), so two boxes
+// overlapping on an axis always share a cell on it, inside the world or not:
+// the broadphase never misses a pair.
+inline WorldTree::Coord WorldTree::cell_of(const Eigen::Vector3d& p) const {
+  Coord c;
+  for (int k = 0; k < 3; ++k) {
+    const double t = (p[k] - world_.min[k]) * inv_cell_[k];
+    c[k] = t >= double(side_) ? uint16_t(side_ - 1) : t > 0 ? uint16_t(t) : uint16_t(0);
+  }
+  return c;
+}
+
+inline WorldTree::CellRange WorldTree::cell_range(const Aabb& box) const {
+  CellRange r{cell_of(box.min), cell_of(box.max), false};
+  uint64_t count = 1;
+  for (int k = 0; k < 3; ++k) count *= uint64_t(r.hi[k]) - r.lo[k] + 1;
+  r.overflow = count > kMaxCells;
+  return r;
+}
+
+inline bool WorldTree::needs_update(uint32_t id, const CellRange& r) const {
+  if (!contains(id)) return true;
+  const Entry& e = entries_[id];
+  for (int k = 0; k < 3; ++k)
+    if (e.lo[k] != r.lo[k] || e.hi[k] != r.hi[k]) return true;
+  return e.overflow != r.overflow;
+}
+
 }  // namespace octbake

@@ -8,17 +8,8 @@
 namespace octbake {
 namespace {
 
+using test::Backwards;
 using test::kWork;
-
-// Runs each range item by item, last first: another legal schedule.
-class Backwards final : public Executor {
- public:
-  void parallel_for(size_t count, size_t, RangeTask task) override {
-    ++calls;
-    for (size_t i = count; i-- > 0;) task(i, i + 1);
-  }
-  int calls = 0;
-};
 
 // 3000 objects: every parallel part (poses, cell checks, pair scan, depths)
 // is split into several chunks.

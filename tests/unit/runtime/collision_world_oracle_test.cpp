@@ -13,6 +13,7 @@
 namespace octbake {
 namespace {
 
+using test::Backwards;
 using test::below;
 using test::kWork;
 using test::uniform;
@@ -217,17 +218,6 @@ TEST(CollisionWorldOracle, RandomCallsGiveBruteForceContactsEveryFrame) {
               (unsigned long long)totals.contacts, (unsigned long long)totals.far_contacts,
               (unsigned long long)totals.outside_contacts);
 }
-
-// An executor that runs the ranges in reverse order, one item at a time:
-// results must not depend on scheduling.
-class Backwards final : public Executor {
- public:
-  void parallel_for(size_t count, size_t, RangeTask task) override {
-    ++calls;
-    for (size_t i = count; i-- > 0;) task(i, i + 1);
-  }
-  int calls = 0;
-};
 
 TEST(CollisionWorldOracle, BitIdenticalAcrossRepeatsThreadCountsAndExecutors) {
   auto run = [](int threads, Executor* executor) {

@@ -20,6 +20,17 @@ constexpr int kWork = 1;  // sanitizer / debug builds: a tenth of the steps
 constexpr int kWork = 10;
 #endif
 
+// An executor that runs the ranges in reverse order, one item at a time:
+// results must not depend on scheduling.
+class Backwards final : public Executor {
+ public:
+  void parallel_for(size_t count, size_t, RangeTask task) override {
+    ++calls;
+    for (size_t i = count; i-- > 0;) task(i, i + 1);
+  }
+  int calls = 0;
+};
+
 inline ObjectTree make_tree(OctreeMasks m) {
   TreeInfo info;
   info.bounds = m.bounds;
