@@ -718,14 +718,16 @@ class PairCollector final : public WorldTree::PairSink {
 }  // namespace
 
 void CollisionWorld::collect_pairs() {
-  // pairs_ as room for as many pairs as any frame had (no allocation then).
-  pairs_.resize(std::max<size_t>(pairs_.capacity(), 256));
+  // Room for as many pairs as any frame had: filled without allocating, and
+  // grown (value-initialised) only after a frame with more.
+  if (pair_room_.size() < std::max<size_t>(pairs_.capacity(), 256))
+    pair_room_.resize(std::max<size_t>(pairs_.capacity(), 256));
   spilled_pairs_.clear();
-  PairCollector collector(pairs_, spilled_pairs_);
+  PairCollector collector(pair_room_, spilled_pairs_);
   run_parallel(tree_.scan_parts(), 1, range_task([&](size_t b, size_t e) {
                  for (size_t k = b; k < e; ++k) tree_.scan_part(k, boxes_, collector);
                }));
-  pairs_.resize(collector.filled());
+  pairs_.assign(pair_room_.begin(), pair_room_.begin() + ptrdiff_t(collector.filled()));
   pairs_.insert(pairs_.end(), spilled_pairs_.begin(), spilled_pairs_.end());
   tree_.finish_pairs(boxes_, pairs_);
 }

@@ -399,7 +399,7 @@ class OCTBAKE_API CollisionWorld {
     PairCache cache;  // in: the last frame's proving leaf pair; out: this frame's
     ContactEstimate estimate;  // with test.hit
   };
-  std::vector<std::pair<uint32_t, uint32_t>> spilled_pairs_;  // collect_pairs: beyond pairs_'s room
+  std::vector<std::pair<uint32_t, uint32_t>> pair_room_, spilled_pairs_;  // collect_pairs: the scan's room, overflow
   std::vector<uint32_t> stale_;  // objects in pairs whose depth is stale
   // set_poses / commit_poses scratch: per item, what moved; per slot, the
   // item that claimed it (duplicate check).
