@@ -1079,10 +1079,8 @@ void CollisionWorld::query_candidates(const Aabb& box) {
   query_ids_.resize(n);
   for (uint32_t i : dirty_)
     if (slots_[i].live && slots_[i].tree_dirty) query_ids_.push_back(i);
-  if (query_ids_.size() > n) {  // ascending
-    std::sort(query_ids_.begin(), query_ids_.end());
-    query_ids_.erase(std::unique(query_ids_.begin(), query_ids_.end()), query_ids_.end());
-  }
+  // The two sets are disjoint and dirty_ names a slot once: sorting suffices.
+  if (query_ids_.size() > n) std::sort(query_ids_.begin(), query_ids_.end());
 }
 
 template <class Ids, class Leaves>

@@ -24,6 +24,7 @@
 // |objects|, all linear; no pass over the world's single-object cells.
 #pragma once
 #include <array>
+#include <cassert>
 #include <cstdint>
 #include <span>
 #include <utility>
@@ -215,6 +216,7 @@ inline WorldTree::Coord WorldTree::cell_of(const Eigen::Vector3d& p) const {
 }
 
 inline WorldTree::CellRange WorldTree::cell_range(const Aabb& box) const {
+  assert(!box.min.hasNaN() && !box.max.hasNaN());
   CellRange r{cell_of(box.min), cell_of(box.max), false};
   uint64_t count = 1;
   for (int k = 0; k < 3; ++k) count *= uint64_t(r.hi[k]) - r.lo[k] + 1;
