@@ -2,6 +2,7 @@
 #include "octbake/lod.h"
 
 #include <algorithm>
+#include <array>
 #include <cassert>
 #include <cmath>
 
@@ -25,10 +26,21 @@ int thesis_depth(double area, double a_min, double a_max, int min_depth, int max
   return d >= max_depth ? max_depth : int(d);
 }
 
+namespace {
+// 2^d for the depths a tree can have (std::ldexp is a library call, and this
+// runs for every object in a pair whenever it or the camera moved).
+constexpr std::array<double, 64> kPow2 = [] {
+  std::array<double, 64> p{};
+  double v = 1;
+  for (double& x : p) x = v, v *= 2;
+  return p;
+}();
+}  // namespace
+
 int screen_depth(double area, int min_depth, int max_depth, double tolerance) {
   const double side = std::sqrt(area);
-  for (int d = std::min(min_depth, max_depth); d < max_depth; ++d)
-    if (side / std::ldexp(1.0, d) <= tolerance) return d;  // exact: division by 2^d
+  for (int d = std::min(min_depth, max_depth); d < max_depth; ++d)  // exact: division by 2^d
+    if (side / (size_t(d) < kPow2.size() ? kPow2[size_t(d)] : std::ldexp(1.0, d)) <= tolerance) return d;
   return max_depth;
 }
 

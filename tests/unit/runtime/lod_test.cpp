@@ -2,8 +2,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
+#include <random>
 
 #include "octbake/lod.h"
+
+#include "seeded_random.h"
 
 namespace octbake {
 namespace {
@@ -38,6 +42,31 @@ TEST(ScreenDepth, Boundaries) {
   EXPECT_EQ(screen_depth(0, 2, 6, 1.0), 2);
   EXPECT_EQ(screen_depth(1920.0 * 1080, 1, 12, 1.0), 11);  // sqrt = 1440 < 2048
   EXPECT_EQ(screen_depth(1e30, 1, 12, 1.0), 12);
+}
+
+// The definition, with the library's ldexp: screen_depth's table of powers
+// must give the same depth for every area, tolerance and depth range.
+int screen_depth_by_definition(double area, int min_depth, int max_depth, double tolerance) {
+  const double side = std::sqrt(area);
+  for (int d = std::min(min_depth, max_depth); d < max_depth; ++d)
+    if (side / std::ldexp(1.0, d) <= tolerance) return d;
+  return max_depth;
+}
+
+TEST(ScreenDepth, EqualsTheDefinitionOnRandomAreas) {
+  std::mt19937 rng(5);
+  const double specials[] = {0.0, std::numeric_limits<double>::denorm_min(), std::numeric_limits<double>::min(),
+                             std::numeric_limits<double>::max(), std::numeric_limits<double>::infinity(),
+                             std::numeric_limits<double>::quiet_NaN(), 1.0, 4.0, 4.0 * (1 + 1e-16)};
+  for (int run = 0; run < 20000; ++run) {
+    const double area = run % 9 == 0 ? specials[(run / 9) % std::size(specials)]
+                                     : std::pow(10.0, -320 + 630 * test::uniform01(rng));
+    const double tolerance = run % 5 == 0 ? std::ldexp(1.0, int(rng() % 40) - 20)
+                                          : std::pow(10.0, -310 + 620 * test::uniform01(rng));
+    const int lo = int(rng() % 80) - 4, hi = int(rng() % 80) - 4;  // beyond the table, and lo > hi
+    ASSERT_EQ(screen_depth(area, lo, hi, tolerance), screen_depth_by_definition(area, lo, hi, tolerance))
+        << "area " << area << " tolerance " << tolerance << " depths " << lo << ".." << hi;
+  }
 }
 
 TEST(ChooseDepths, ClampsToEachObject) {
