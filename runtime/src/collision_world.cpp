@@ -33,6 +33,9 @@ constexpr double kRelativePad = 1e-9;
 constexpr size_t kPairGrain = 64;    // pair tests
 constexpr size_t kPoseGrain = 512;   // set_poses items, commit_poses checks
 constexpr size_t kDepthGrain = 32;   // depth refreshes (a pixel area each at most)
+// WorldTree cell-move parts on threads: each reads every move, so few, but
+// enough for the executor to balance two to four threads.
+constexpr size_t kCellParts = 8;
 
 // A RangeTask running f(begin, end); f must outlive the call.
 template <class F>
@@ -50,13 +53,22 @@ uint64_t pair_key(const std::pair<uint32_t, uint32_t>& p) { return (uint64_t(p.f
 
 Error bad(std::string why) { return Error{ErrorCode::invalid_argument, std::move(why)}; }
 
+// |q| within 1e-6 of 1, on the squared norm (no square root per set_pose).
+bool unit_rotation(const Pose& p) {
+  constexpr double kLo = (1 - 1e-6) * (1 - 1e-6), kHi = (1 + 1e-6) * (1 + 1e-6);
+  const double n2 = p.rotation.squaredNorm();
+  return p.rotation.coeffs().allFinite() && n2 > kLo && n2 < kHi;
+}
+
+// check_pose's test alone: no Status built on the hot path.
+bool pose_ok(const Pose& p) {
+  return p.position.allFinite() && std::isfinite(p.scale) && p.scale > 0 && unit_rotation(p);
+}
+
 Status check_pose(const Pose& p) {
   if (!p.position.allFinite()) return bad("pose: position is not finite");
   if (!std::isfinite(p.scale) || !(p.scale > 0)) return bad("pose: scale must be finite and > 0");
-  // |q| within 1e-6 of 1, on the squared norm (no square root per set_pose).
-  constexpr double kLo = (1 - 1e-6) * (1 - 1e-6), kHi = (1 + 1e-6) * (1 + 1e-6);
-  const double n2 = p.rotation.squaredNorm();
-  if (!p.rotation.coeffs().allFinite() || !(n2 > kLo && n2 < kHi)) return bad("pose: rotation is not a unit quaternion");
+  if (!unit_rotation(p)) return bad("pose: rotation is not a unit quaternion");
   return std::monostate{};
 }
 
@@ -323,7 +335,7 @@ Status CollisionWorld::check(ObjectHandle h) const {
   return std::monostate{};
 }
 
-bool CollisionWorld::alive(ObjectHandle h) const { return check(h).ok(); }
+bool CollisionWorld::alive(ObjectHandle h) const { return valid(h); }
 
 std::optional<ObjectHandle> CollisionWorld::handle_at(uint32_t slot) const {
   if (slot >= slots_.size() || !slots_[slot].live) return std::nullopt;
@@ -436,13 +448,15 @@ bool same_pose(const Pose& a, const Pose& b) { return same_frame_of(a, b) && sam
 }
 
 Status CollisionWorld::set_pose(ObjectHandle h, const Pose& pose) {
-  if (Status st = check(h); !st) return st;
+  // Statuses are built only for errors: their construction and destruction
+  // were a fifth of a set_pose.
+  if (!valid(h)) return check(h);
   // An app that sets every pose every frame pays almost nothing for the
   // objects that did not move.
   const Pose& now = slots_[h.slot].pose;
   const bool same_frame = same_frame_of(pose, now);
   if (same_frame && same_bits(pose.position, now.position)) return std::monostate{};
-  if (Status st = check_pose(pose); !st) return st;
+  if (!pose_ok(pose)) return check_pose(pose);
   if (move_to(h.slot, pose, same_frame)) dirty_.push_back(h.slot);
   if (settings_.area_refresh == AreaRefresh::on_demand) any_stale_area_ = true;
   return std::monostate{};
@@ -462,11 +476,13 @@ Status CollisionWorld::set_poses(std::span<const ObjectHandle> handles, std::spa
     bool ok = true;
     for (size_t k = b; k < e; ++k) {
       const ObjectHandle h = handles[k];
-      if (!alive(h)) {
+      if (!valid(h)) {
         ok = false;
         continue;
       }
-      if (!same_pose(poses[k], slots_[h.slot].pose) && !check_pose(poses[k])) ok = false;
+      // A pose bitwise equal to the stored one passed pose_ok when it was
+      // set: no need to read the stored pose (a second cache line) here.
+      if (!pose_ok(poses[k])) ok = false;
       std::atomic_ref<uint32_t>(claim_[h.slot]).store(uint32_t(k), std::memory_order_relaxed);
     }
     if (!ok) refused.store(true, std::memory_order_relaxed);
@@ -495,10 +511,13 @@ Status CollisionWorld::set_poses(std::span<const ObjectHandle> handles, std::spa
   };
   run_parallel(n, kPoseGrain, range_task(move_items));
   bool moved = false;
+  size_t listed = dirty_.size();
+  dirty_.resize(listed + n);  // no allocation once dirty_ held a whole batch
   for (size_t k = 0; k < n; ++k) {
     moved |= move_flags_[k] != kUnmoved;
-    if (move_flags_[k] == kNewlyDirty) dirty_.push_back(handles[k].slot);
+    if (move_flags_[k] == kNewlyDirty) dirty_[listed++] = handles[k].slot;
   }
+  dirty_.resize(listed);
   if (moved && settings_.area_refresh == AreaRefresh::on_demand) any_stale_area_ = true;
   return std::monostate{};
 }
@@ -663,7 +682,8 @@ void CollisionWorld::test_pairs(size_t begin, size_t end) {
 
 void CollisionWorld::commit_poses() {
   // Which dirty objects changed cells, in parallel (dirty_ names each slot
-  // once, see create()); then the moves themselves, which share cells, in order.
+  // once, see create()); then the WorldTree's batch moves them (in parallel
+  // parts but for the cells new to its table).
   const size_t n = dirty_.size();
   if (move_flags_.size() < n) move_flags_.resize(n);
   if (ranges_.size() < n) ranges_.resize(n);
@@ -680,8 +700,24 @@ void CollisionWorld::commit_poses() {
     }
   };
   run_parallel(n, kPoseGrain, range_task(check_cells));
+  // The moved ones, in order, to the front (dirty_ is cleared below).
+  size_t moved = 0;
   for (size_t k = 0; k < n; ++k)
-    if (move_flags_[k] == kMoved && tree_.update_cells(dirty_[k], ranges_[k])) cell_changed_[dirty_[k]] = 1;
+    if (move_flags_[k] == kMoved) {
+      cell_changed_[dirty_[k]] = 1;
+      dirty_[moved] = dirty_[k];
+      ranges_[moved++] = ranges_[k];
+    }
+  struct OnWorld final : WorldTree::Parallel {
+    CollisionWorld* world;
+    explicit OnWorld(CollisionWorld* w) : world(w) {}
+    void for_ranges(size_t count, size_t grain, void (*task)(const void*, size_t, size_t), const void* ctx) override {
+      world->run_parallel(count, grain, RangeTask{task, ctx});
+    }
+  } on_world(this);
+  // Inline: one pass over the cells; on threads, parts of disjoint cells.
+  const size_t parts = settings_.executor || pool_ ? kCellParts : 1;
+  tree_.update_cells(std::span(dirty_).first(moved), std::span(ranges_).first(moved), on_world, parts);
   dirty_.clear();
 }
 

@@ -347,6 +347,11 @@ class OCTBAKE_API CollisionWorld {
   };
 
   Status check(ObjectHandle h) const;
+  // check(h) passes (inline: a handle check per set_pose).
+  bool valid(ObjectHandle h) const {
+    return h.world == id_ && h.slot < slots_.size() && h.generation != 0 && slots_[h.slot].live &&
+           slots_[h.slot].generation == h.generation;
+  }
   const ObjectTree& tree_of(const Slot& s) const;
   int max_depth_of(const Slot& s) const;
   void place_box(uint32_t slot);  // boxes_[slot] from the slot's pose and offset
