@@ -124,27 +124,30 @@ int WorldTree::leave_cell(uint32_t slot, uint32_t id) {
 void WorldTree::drop_empty_cells() {
   const size_t empty = table_used_ - occupied_;
   if (empty <= std::max<size_t>(occupied_, 256)) return;
-  // Free them so a long run over a deep world does not accumulate them; slot
-  // order keeps the free list (hence later numbering) deterministic.
+  // Slot order keeps the free list (hence later numbering) deterministic.
+  for (uint32_t slot = 0; slot < cells_.size(); ++slot)
+    if (cells_[slot].linked && cells_[slot].ids.empty()) free_cell(slot);
+}
+
+// Takes the cell out of the table (so a long run over a deep world does not
+// accumulate cells) and lists its slot for reuse.
+void WorldTree::free_cell(uint32_t slot) {
+  Cell& cell = cells_[slot];
   const size_t mask = table_.size() - 1;
-  for (uint32_t slot = 0; slot < cells_.size(); ++slot) {
-    Cell& cell = cells_[slot];
-    if (!cell.linked || !cell.ids.empty()) continue;
-    size_t i = table_find(pack(cell.at));
-    // Backward-shift deletion: pull later entries of the probe run into the
-    // gap unless their home lies cyclically in (gap, j].
-    for (size_t j = (i + 1) & mask; table_[j] != 0; j = (j + 1) & mask) {
-      const size_t h = home(uint32_t((table_[j] >> 32) - 1), mask);
-      const bool stays = i <= j ? (i < h && h <= j) : (i < h || h <= j);
-      if (stays) continue;
-      table_[i] = table_[j];
-      i = j;
-    }
-    table_[i] = 0;
-    --table_used_;
-    cell.linked = false;
-    free_cells_.push_back(slot);
+  size_t i = table_find(pack(cell.at));
+  // Backward-shift deletion: pull later entries of the probe run into the gap
+  // unless their home lies cyclically in (gap, j].
+  for (size_t j = (i + 1) & mask; table_[j] != 0; j = (j + 1) & mask) {
+    const size_t h = home(uint32_t((table_[j] >> 32) - 1), mask);
+    const bool stays = i <= j ? (i < h && h <= j) : (i < h || h <= j);
+    if (stays) continue;
+    table_[i] = table_[j];
+    i = j;
   }
+  table_[i] = 0;
+  --table_used_;
+  cell.linked = false;
+  free_cells_.push_back(slot);
 }
 
 void WorldTree::relink(uint32_t id, const Coord& lo, const Coord& hi, bool overflow) {
@@ -264,10 +267,14 @@ void WorldTree::apply_moves(std::span<const uint32_t> ids, size_t part, size_t p
   const uint32_t mask = uint32_t(parts - 1);
   int occupied = 0;
   for (size_t k = 0; k < ids.size(); ++k) {
-    const Move& m = moves_[k];
+    Move& m = moves_[k];
     if (m.kind != MoveKind::fast) continue;
     for (int i = 0; i < m.leaves; ++i)
-      if (((m.leave[i] / 64) & mask) == part) occupied += leave_cell(m.leave[i], ids[k]);
+      if (((m.leave[i] / 64) & mask) == part) {
+        const int left = leave_cell(m.leave[i], ids[k]);
+        m.emptied[i] = left != 0;  // this op's own byte: no other part writes it
+        occupied += left;
+      }
     for (int i = 0; i < m.enters; ++i)
       if (((m.enter[i] / 64) & mask) == part) occupied += enter_cell(m.enter[i], ids[k]);
   }
@@ -297,7 +304,9 @@ void WorldTree::update_cells(std::span<const uint32_t> ids, std::span<const Cell
   assert(ids.size() == ranges.size());
   assert(parts >= 1 && std::has_single_bit(parts));
   const size_t n = ids.size();
-  if (moves_.size() < n) moves_.resize(n);  // grows with the batch only
+  // Sized for every object at once: grows with the world, not with a frame
+  // that moves more objects than the frames before.
+  if (moves_.size() < n) moves_.resize(std::max(n, entries_.size()));
   // 1. What each object leaves and enters (reads only).
   for_ranges(parallel, n, kMoveGrain, [&](size_t b, size_t e) {
     for (size_t k = b; k < e; ++k) plan_move(ids[k], ranges[k], moves_[k]);
@@ -329,6 +338,19 @@ void WorldTree::update_cells(std::span<const uint32_t> ids, std::span<const Cell
     for (size_t k = b; k < e; ++k)
       if (moves_[k].kind == MoveKind::fast) finish_move(ids[k], ranges[k], moves_[k]);
   });
+  // 5. The cells the moves emptied are freed, in k order (the free list, hence
+  // later numbering, does not depend on the parts), unless refilled: the free
+  // list then serves the next batch's new cells and the cells never outgrow
+  // the most ever occupied (a warmed-up frame allocates nothing). The slow
+  // moves' empties wait for drop_empty_cells.
+  for (size_t k = 0; k < n; ++k) {
+    const Move& m = moves_[k];
+    if (m.kind != MoveKind::fast) continue;
+    for (int i = 0; i < m.leaves; ++i) {
+      const uint32_t slot = m.leave[i];
+      if (m.emptied[i] && cells_[slot].linked && cells_[slot].ids.empty()) free_cell(slot);
+    }
+  }
   drop_empty_cells();
 }
 

@@ -191,6 +191,7 @@ class OCTBAKE_API WorldTree {
     uint8_t leaves = 0, enters = 0;
     uint8_t missing = 0;  // bit i: enter[i]'s cell was not in the table yet
     std::array<uint32_t, kFastCells> leave, enter;  // slots (enter in [lo, hi] order)
+    std::array<bool, kFastCells> emptied;            // leave[i] left its cell empty
   };
 
   Coord cell_of(const Eigen::Vector3d& p) const;
@@ -215,10 +216,12 @@ class OCTBAKE_API WorldTree {
   uint32_t cell_slot(const Coord& at);  // finds or creates
   size_t table_find(uint32_t key) const;
   void table_grow();
-  // Emptied cells stay in the table (a batch can look cells up while others
-  // empty, and an object moving back finds its cell); they are dropped all at
-  // once when they outnumber the occupied ones, so memory stays bounded.
+  // Emptied cells stay in the table while a batch runs (its plan holds slots
+  // looked up before); the batch frees those its fast moves emptied at its
+  // end, and the others (left by update(), remove() and slow moves) are
+  // dropped all at once when they outnumber the occupied ones.
   void drop_empty_cells();
+  void free_cell(uint32_t slot);
 
   Aabb world_;
   int depth_;
