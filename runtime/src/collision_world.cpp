@@ -33,8 +33,8 @@ constexpr double kRelativePad = 1e-9;
 constexpr size_t kPairGrain = 64;    // pair tests
 constexpr size_t kPoseGrain = 512;   // set_poses items, commit_poses checks
 constexpr size_t kDepthGrain = 32;   // depth refreshes (a pixel area each at most)
-// WorldTree cell-move parts on threads: each reads every move, so few, but
-// enough for the executor to balance two to four threads.
+// WorldTree cell-move parts on an executor of unknown size: each part reads
+// every move, so few, but enough to balance a few threads.
 constexpr size_t kCellParts = 8;
 
 // A RangeTask running f(begin, end); f must outlive the call.
@@ -501,26 +501,43 @@ Status CollisionWorld::set_poses(std::span<const ObjectHandle> handles, std::spa
   };
   if (!refused.load()) run_parallel(n, kPoseGrain, range_task(check_claims));
   if (refused.load()) return first_pose_error(handles, poses);
-  // 3. The moves, each on its own slot; then the newly dirty listed in order.
+  // 3. The moves, each on its own slot, in blocks that count their newly
+  // dirty; then each block lists those at its offset in dirty_: item order,
+  // as a serial pass would give, without one.
   if (move_flags_.size() < n) move_flags_.resize(n);
-  const auto move_items = [&](size_t b, size_t e) {
-    for (size_t k = b; k < e; ++k) {
-      const uint32_t i = handles[k].slot;
-      const bool same_frame = same_frame_of(poses[k], slots_[i].pose);
-      move_flags_[k] = same_frame && same_bits(poses[k].position, slots_[i].pose.position) ? kUnmoved
-                       : move_to(i, poses[k], same_frame)                                  ? kNewlyDirty
-                                                                                            : kMoved;
+  const size_t blocks = (n + kPoseGrain - 1) / kPoseGrain;
+  if (block_listed_.size() < blocks) block_listed_.resize(blocks);
+  std::atomic<bool> any_moved{false};
+  const auto move_blocks = [&](size_t b, size_t e) {
+    bool any = false;
+    for (size_t block = b; block < e; ++block) {
+      uint32_t newly = 0;
+      for (size_t k = block * kPoseGrain; k < std::min(n, (block + 1) * kPoseGrain); ++k) {
+        const uint32_t i = handles[k].slot;
+        const bool same_frame = same_frame_of(poses[k], slots_[i].pose);
+        move_flags_[k] = same_frame && same_bits(poses[k].position, slots_[i].pose.position) ? kUnmoved
+                         : move_to(i, poses[k], same_frame)                                  ? kNewlyDirty
+                                                                                              : kMoved;
+        newly += move_flags_[k] == kNewlyDirty;
+        any |= move_flags_[k] != kUnmoved;
+      }
+      block_listed_[block] = newly;
+    }
+    if (any) any_moved.store(true, std::memory_order_relaxed);
+  };
+  run_parallel(blocks, 1, range_task(move_blocks));
+  size_t listed = dirty_.size();
+  for (size_t block = 0; block < blocks; ++block) listed += std::exchange(block_listed_[block], uint32_t(listed));
+  dirty_.resize(listed);  // no allocation once dirty_ held a whole batch
+  const auto list_blocks = [&](size_t b, size_t e) {
+    for (size_t block = b; block < e; ++block) {
+      uint32_t at = block_listed_[block];
+      for (size_t k = block * kPoseGrain; k < std::min(n, (block + 1) * kPoseGrain); ++k)
+        if (move_flags_[k] == kNewlyDirty) dirty_[at++] = handles[k].slot;
     }
   };
-  run_parallel(n, kPoseGrain, range_task(move_items));
-  bool moved = false;
-  size_t listed = dirty_.size();
-  dirty_.resize(listed + n);  // no allocation once dirty_ held a whole batch
-  for (size_t k = 0; k < n; ++k) {
-    moved |= move_flags_[k] != kUnmoved;
-    if (move_flags_[k] == kNewlyDirty) dirty_[listed++] = handles[k].slot;
-  }
-  dirty_.resize(listed);
+  run_parallel(blocks, 1, range_task(list_blocks));
+  const bool moved = any_moved.load();
   if (moved && settings_.area_refresh == AreaRefresh::on_demand) any_stale_area_ = true;
   return std::monostate{};
 }
@@ -718,8 +735,11 @@ void CollisionWorld::commit_poses() {
       world->run_parallel(count, grain, RangeTask{task, ctx});
     }
   } on_world(this);
-  // Inline: one pass over the cells; on threads, parts of disjoint cells.
-  const size_t parts = settings_.executor || pool_ ? kCellParts : 1;
+  // Inline: one pass over the cells; on threads, parts of disjoint cells
+  // (one per pool thread: the parts are even, being hashed by cell slot).
+  const size_t parts = settings_.executor ? kCellParts
+                       : pool_ ? std::min(kCellParts, std::bit_ceil(size_t(pool_->threads())))
+                               : 1;
   tree_.update_cells(std::span(dirty_).first(moved), std::span(ranges_).first(moved), on_world, parts);
   dirty_.clear();
 }

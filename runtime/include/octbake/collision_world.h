@@ -410,6 +410,7 @@ class OCTBAKE_API CollisionWorld {
   // item that claimed it (duplicate check).
   enum : uint8_t { kUnmoved, kMoved, kNewlyDirty };
   std::vector<uint8_t> move_flags_;
+  std::vector<uint32_t> block_listed_;  // set_poses: per block of items, its newly dirty, then its offset in dirty_
   std::vector<WorldTree::CellRange> ranges_;  // commit_poses: per dirty_ entry
   std::vector<uint32_t> claim_;
   std::vector<PairResult> results_;

@@ -89,11 +89,14 @@ class OCTBAKE_API WorldTree {
   // up, not yet changed); the cells new to the table are made, in k order;
   // then the cells take their arrivals and departures in `parts` groups of
   // disjoint cells (a power of two; 1 when running inline), and each object
-  // its new cell list. Objects that are new, go to or from overflow, or span
-  // more than kFastCells cells take the one-by-one path, in k order. The
-  // cells' contents, pairs, queries and reinsertions after it equal those of
-  // the one-by-one calls whatever `parts` and `parallel` do; only the
-  // internal cell numbering may differ, and nothing observable depends on it.
+  // its new cell list; last the cells left empty are freed, in k order.
+  // Objects that are new, go to or from overflow, or span more than
+  // kFastCells cells take the one-by-one path, in k order. The cells'
+  // contents, pairs, queries and reinsertions after it equal those of the
+  // one-by-one calls whatever `parts` and `parallel` do; only the internal
+  // cell numbering may differ, and nothing observable depends on it (pairs
+  // and query answers are sorted, ray walks go by geometry). Allocates only
+  // to grow with the world.
   static constexpr uint32_t kFastCells = 8;
   void update_cells(std::span<const uint32_t> ids, std::span<const CellRange> ranges, Parallel& parallel, size_t parts);
   // overlapping_pairs in pieces: scan_part(k) for every k < scan_parts()
