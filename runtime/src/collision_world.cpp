@@ -528,7 +528,7 @@ Status CollisionWorld::set_poses(std::span<const ObjectHandle> handles, std::spa
   run_parallel(blocks, 1, range_task(move_blocks));
   size_t listed = dirty_.size();
   for (size_t block = 0; block < blocks; ++block) listed += std::exchange(block_listed_[block], uint32_t(listed));
-  dirty_.resize(listed);  // no allocation once dirty_ held a whole batch
+  dirty_.resize(listed);  // names each slot once: never outgrows the world
   const auto list_blocks = [&](size_t b, size_t e) {
     for (size_t block = b; block < e; ++block) {
       uint32_t at = block_listed_[block];
