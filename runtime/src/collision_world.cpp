@@ -515,11 +515,12 @@ Status CollisionWorld::set_poses(std::span<const ObjectHandle> handles, std::spa
       for (size_t k = block * kPoseGrain; k < std::min(n, (block + 1) * kPoseGrain); ++k) {
         const uint32_t i = handles[k].slot;
         const bool same_frame = same_frame_of(poses[k], slots_[i].pose);
-        move_flags_[k] = same_frame && same_bits(poses[k].position, slots_[i].pose.position) ? kUnmoved
-                         : move_to(i, poses[k], same_frame)                                  ? kNewlyDirty
-                                                                                              : kMoved;
-        newly += move_flags_[k] == kNewlyDirty;
-        any |= move_flags_[k] != kUnmoved;
+        const uint8_t flag = same_frame && same_bits(poses[k].position, slots_[i].pose.position) ? kUnmoved
+                             : move_to(i, poses[k], same_frame)                                  ? kNewlyDirty
+                                                                                                  : kMoved;
+        move_flags_[k] = flag;  // a byte store may alias anything: counted from the local
+        newly += flag == kNewlyDirty;
+        any |= flag != kUnmoved;
       }
       block_listed_[block] = newly;
     }
@@ -530,10 +531,12 @@ Status CollisionWorld::set_poses(std::span<const ObjectHandle> handles, std::spa
   for (size_t block = 0; block < blocks; ++block) listed += std::exchange(block_listed_[block], uint32_t(listed));
   dirty_.resize(listed);  // names each slot once: never outgrows the world
   const auto list_blocks = [&](size_t b, size_t e) {
+    const uint8_t* flags = move_flags_.data();
+    uint32_t* list = dirty_.data();
     for (size_t block = b; block < e; ++block) {
       uint32_t at = block_listed_[block];
-      for (size_t k = block * kPoseGrain; k < std::min(n, (block + 1) * kPoseGrain); ++k)
-        if (move_flags_[k] == kNewlyDirty) dirty_[at++] = handles[k].slot;
+      for (size_t k = block * kPoseGrain, end = std::min(n, k + kPoseGrain); k < end; ++k)
+        if (flags[k] == kNewlyDirty) list[at++] = handles[k].slot;
     }
   };
   run_parallel(blocks, 1, range_task(list_blocks));
