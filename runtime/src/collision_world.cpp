@@ -33,6 +33,9 @@ constexpr double kRelativePad = 1e-9;
 constexpr size_t kPairGrain = 64;    // pair tests
 constexpr size_t kPoseGrain = 512;   // set_poses items, commit_poses checks
 constexpr size_t kDepthGrain = 32;   // depth refreshes (a pixel area each at most)
+// WorldTree cell-move parts on an executor of unknown size: each part reads
+// every move, so few, but enough to balance a few threads.
+constexpr size_t kCellParts = 8;
 
 // A RangeTask running f(begin, end); f must outlive the call.
 template <class F>
@@ -50,13 +53,25 @@ uint64_t pair_key(const std::pair<uint32_t, uint32_t>& p) { return (uint64_t(p.f
 
 Error bad(std::string why) { return Error{ErrorCode::invalid_argument, std::move(why)}; }
 
+// |q| within 1e-6 of 1, on the squared norm (no square root per set_pose).
+// NaN fails the comparisons and infinity the upper bound, so no finite test.
+bool unit_rotation(const Pose& p) {
+  constexpr double kLo = (1 - 1e-6) * (1 - 1e-6), kHi = (1 + 1e-6) * (1 + 1e-6);
+  const double n2 = p.rotation.squaredNorm();
+  return n2 > kLo && n2 < kHi;
+}
+
+// check_pose's test alone, inline: no Status built on the hot path.
+[[gnu::always_inline]] inline bool pose_ok(const Pose& p) {
+  const Eigen::Vector3d& x = p.position;
+  return std::isfinite(x[0]) && std::isfinite(x[1]) && std::isfinite(x[2]) && std::isfinite(p.scale) && p.scale > 0 &&
+         unit_rotation(p);
+}
+
 Status check_pose(const Pose& p) {
   if (!p.position.allFinite()) return bad("pose: position is not finite");
   if (!std::isfinite(p.scale) || !(p.scale > 0)) return bad("pose: scale must be finite and > 0");
-  // |q| within 1e-6 of 1, on the squared norm (no square root per set_pose).
-  constexpr double kLo = (1 - 1e-6) * (1 - 1e-6), kHi = (1 + 1e-6) * (1 + 1e-6);
-  const double n2 = p.rotation.squaredNorm();
-  if (!p.rotation.coeffs().allFinite() || !(n2 > kLo && n2 < kHi)) return bad("pose: rotation is not a unit quaternion");
+  if (!unit_rotation(p)) return bad("pose: rotation is not a unit quaternion");
   return std::monostate{};
 }
 
@@ -323,7 +338,7 @@ Status CollisionWorld::check(ObjectHandle h) const {
   return std::monostate{};
 }
 
-bool CollisionWorld::alive(ObjectHandle h) const { return check(h).ok(); }
+bool CollisionWorld::alive(ObjectHandle h) const { return valid(h); }
 
 std::optional<ObjectHandle> CollisionWorld::handle_at(uint32_t slot) const {
   if (slot >= slots_.size() || !slots_[slot].live) return std::nullopt;
@@ -436,13 +451,15 @@ bool same_pose(const Pose& a, const Pose& b) { return same_frame_of(a, b) && sam
 }
 
 Status CollisionWorld::set_pose(ObjectHandle h, const Pose& pose) {
-  if (Status st = check(h); !st) return st;
+  // Statuses are built only for errors: their construction and destruction
+  // were a fifth of a set_pose.
+  if (!valid(h)) return check(h);
   // An app that sets every pose every frame pays almost nothing for the
   // objects that did not move.
   const Pose& now = slots_[h.slot].pose;
   const bool same_frame = same_frame_of(pose, now);
   if (same_frame && same_bits(pose.position, now.position)) return std::monostate{};
-  if (Status st = check_pose(pose); !st) return st;
+  if (!pose_ok(pose)) return check_pose(pose);
   if (move_to(h.slot, pose, same_frame)) dirty_.push_back(h.slot);
   if (settings_.area_refresh == AreaRefresh::on_demand) any_stale_area_ = true;
   return std::monostate{};
@@ -462,11 +479,13 @@ Status CollisionWorld::set_poses(std::span<const ObjectHandle> handles, std::spa
     bool ok = true;
     for (size_t k = b; k < e; ++k) {
       const ObjectHandle h = handles[k];
-      if (!alive(h)) {
+      if (!valid(h)) {
         ok = false;
         continue;
       }
-      if (!same_pose(poses[k], slots_[h.slot].pose) && !check_pose(poses[k])) ok = false;
+      // A pose bitwise equal to the stored one passed pose_ok when it was
+      // set: no need to read the stored pose (a second cache line) here.
+      if (!pose_ok(poses[k])) ok = false;
       std::atomic_ref<uint32_t>(claim_[h.slot]).store(uint32_t(k), std::memory_order_relaxed);
     }
     if (!ok) refused.store(true, std::memory_order_relaxed);
@@ -482,23 +501,46 @@ Status CollisionWorld::set_poses(std::span<const ObjectHandle> handles, std::spa
   };
   if (!refused.load()) run_parallel(n, kPoseGrain, range_task(check_claims));
   if (refused.load()) return first_pose_error(handles, poses);
-  // 3. The moves, each on its own slot; then the newly dirty listed in order.
+  // 3. The moves, each on its own slot, in blocks that count their newly
+  // dirty; then each block lists those at its offset in dirty_: item order,
+  // as a serial pass would give, without one.
   if (move_flags_.size() < n) move_flags_.resize(n);
-  const auto move_items = [&](size_t b, size_t e) {
-    for (size_t k = b; k < e; ++k) {
-      const uint32_t i = handles[k].slot;
-      const bool same_frame = same_frame_of(poses[k], slots_[i].pose);
-      move_flags_[k] = same_frame && same_bits(poses[k].position, slots_[i].pose.position) ? kUnmoved
-                       : move_to(i, poses[k], same_frame)                                  ? kNewlyDirty
-                                                                                            : kMoved;
+  const size_t blocks = (n + kPoseGrain - 1) / kPoseGrain;
+  if (block_listed_.size() < blocks) block_listed_.resize(blocks);
+  std::atomic<bool> any_moved{false};
+  const auto move_blocks = [&](size_t b, size_t e) {
+    bool any = false;
+    for (size_t block = b; block < e; ++block) {
+      uint32_t newly = 0;
+      for (size_t k = block * kPoseGrain; k < std::min(n, (block + 1) * kPoseGrain); ++k) {
+        const uint32_t i = handles[k].slot;
+        const bool same_frame = same_frame_of(poses[k], slots_[i].pose);
+        const uint8_t flag = same_frame && same_bits(poses[k].position, slots_[i].pose.position) ? kUnmoved
+                             : move_to(i, poses[k], same_frame)                                  ? kNewlyDirty
+                                                                                                  : kMoved;
+        move_flags_[k] = flag;  // a byte store may alias anything: counted from the local
+        newly += flag == kNewlyDirty;
+        any |= flag != kUnmoved;
+      }
+      block_listed_[block] = newly;
+    }
+    if (any) any_moved.store(true, std::memory_order_relaxed);
+  };
+  run_parallel(blocks, 1, range_task(move_blocks));
+  size_t listed = dirty_.size();
+  for (size_t block = 0; block < blocks; ++block) listed += std::exchange(block_listed_[block], uint32_t(listed));
+  dirty_.resize(listed);  // names each slot once: never outgrows the world
+  const auto list_blocks = [&](size_t b, size_t e) {
+    const uint8_t* flags = move_flags_.data();
+    uint32_t* list = dirty_.data();
+    for (size_t block = b; block < e; ++block) {
+      uint32_t at = block_listed_[block];
+      for (size_t k = block * kPoseGrain, end = std::min(n, k + kPoseGrain); k < end; ++k)
+        if (flags[k] == kNewlyDirty) list[at++] = handles[k].slot;
     }
   };
-  run_parallel(n, kPoseGrain, range_task(move_items));
-  bool moved = false;
-  for (size_t k = 0; k < n; ++k) {
-    moved |= move_flags_[k] != kUnmoved;
-    if (move_flags_[k] == kNewlyDirty) dirty_.push_back(handles[k].slot);
-  }
+  run_parallel(blocks, 1, range_task(list_blocks));
+  const bool moved = any_moved.load();
   if (moved && settings_.area_refresh == AreaRefresh::on_demand) any_stale_area_ = true;
   return std::monostate{};
 }
@@ -663,7 +705,8 @@ void CollisionWorld::test_pairs(size_t begin, size_t end) {
 
 void CollisionWorld::commit_poses() {
   // Which dirty objects changed cells, in parallel (dirty_ names each slot
-  // once, see create()); then the moves themselves, which share cells, in order.
+  // once, see create()); then the WorldTree's batch moves them (in parallel
+  // parts but for the cells new to its table).
   const size_t n = dirty_.size();
   if (move_flags_.size() < n) move_flags_.resize(n);
   if (ranges_.size() < n) ranges_.resize(n);
@@ -680,8 +723,27 @@ void CollisionWorld::commit_poses() {
     }
   };
   run_parallel(n, kPoseGrain, range_task(check_cells));
+  // The moved ones, in order, to the front (dirty_ is cleared below).
+  size_t moved = 0;
   for (size_t k = 0; k < n; ++k)
-    if (move_flags_[k] == kMoved && tree_.update_cells(dirty_[k], ranges_[k])) cell_changed_[dirty_[k]] = 1;
+    if (move_flags_[k] == kMoved) {
+      cell_changed_[dirty_[k]] = 1;
+      dirty_[moved] = dirty_[k];
+      ranges_[moved++] = ranges_[k];
+    }
+  struct OnWorld final : WorldTree::Parallel {
+    CollisionWorld* world;
+    explicit OnWorld(CollisionWorld* w) : world(w) {}
+    void for_ranges(size_t count, size_t grain, void (*task)(const void*, size_t, size_t), const void* ctx) override {
+      world->run_parallel(count, grain, RangeTask{task, ctx});
+    }
+  } on_world(this);
+  // Inline: one pass over the cells; on threads, parts of disjoint cells
+  // (one per pool thread: the parts are even, being hashed by cell slot).
+  const size_t parts = settings_.executor ? kCellParts
+                       : pool_ ? std::min(kCellParts, std::bit_ceil(size_t(pool_->threads())))
+                               : 1;
+  tree_.update_cells(std::span(dirty_).first(moved), std::span(ranges_).first(moved), on_world, parts);
   dirty_.clear();
 }
 

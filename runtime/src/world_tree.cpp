@@ -1,6 +1,7 @@
 #include "octbake/world_tree.h"
 
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <cassert>
 #include <cmath>
@@ -44,6 +45,27 @@ bool inside(const std::array<uint16_t, 3>& c, const std::array<uint16_t, 3>& lo,
   return true;
 }
 
+// f(c) for the cells of [lo, hi], z slowest, x fastest: Entry::cells' order.
+template <class F>
+void for_each_cell(const std::array<uint16_t, 3>& lo, const std::array<uint16_t, 3>& hi, F f) {
+  std::array<uint16_t, 3> c;
+  for (c[2] = lo[2]; c[2] <= hi[2]; ++c[2])
+    for (c[1] = lo[1]; c[1] <= hi[1]; ++c[1])
+      for (c[0] = lo[0]; c[0] <= hi[0]; ++c[0]) f(c);
+}
+
+uint64_t cell_count(const std::array<uint16_t, 3>& lo, const std::array<uint16_t, 3>& hi) {
+  uint64_t n = 1;
+  for (int k = 0; k < 3; ++k) n *= uint64_t(hi[k]) - lo[k] + 1;
+  return n;
+}
+
+// Index of cell c in for_each_cell(lo, hi)'s order.
+size_t index_in(const std::array<uint16_t, 3>& c, const std::array<uint16_t, 3>& lo, const std::array<uint16_t, 3>& hi) {
+  const size_t nx = size_t(hi[0]) - lo[0] + 1, ny = size_t(hi[1]) - lo[1] + 1;
+  return ((size_t(c[2]) - lo[2]) * ny + (size_t(c[1]) - lo[1])) * nx + (size_t(c[0]) - lo[0]);
+}
+
 }  // namespace
 
 // Index of `key`'s entry, or of the empty entry where it would go.
@@ -79,23 +101,38 @@ uint32_t WorldTree::cell_slot(const Coord& at) {
     free_cells_.pop_back();
   }
   cells_[slot].at = at;
+  cells_[slot].linked = true;
   table_[i] = ((uint64_t(key) + 1) << 32) | slot;
   ++table_used_;
   return slot;
 }
 
-void WorldTree::enter_cell(uint32_t slot, uint32_t id) {
+int WorldTree::enter_cell(uint32_t slot, uint32_t id) {
   Cell& cell = cells_[slot];
   insert_sorted(cell.ids, id);
   if (cell.ids.size() == 2) busy_[slot / 64] |= uint64_t(1) << (slot % 64);
+  return cell.ids.size() == 1;
 }
 
-void WorldTree::leave_cell(uint32_t slot, uint32_t id) {
+int WorldTree::leave_cell(uint32_t slot, uint32_t id) {
   Cell& cell = cells_[slot];
   erase_sorted(cell.ids, id);
   if (cell.ids.size() < 2) busy_[slot / 64] &= ~(uint64_t(1) << (slot % 64));
-  if (!cell.ids.empty()) return;
-  // Free the cell so a long run over a deep world does not accumulate them.
+  return -int(cell.ids.empty());
+}
+
+void WorldTree::drop_empty_cells() {
+  const size_t empty = table_used_ - occupied_;
+  if (empty <= std::max<size_t>(occupied_, 256)) return;
+  // Slot order keeps the free list (hence later numbering) deterministic.
+  for (uint32_t slot = 0; slot < cells_.size(); ++slot)
+    if (cells_[slot].linked && cells_[slot].ids.empty()) free_cell(slot);
+}
+
+// Takes the cell out of the table (so a long run over a deep world does not
+// accumulate cells) and lists its slot for reuse.
+void WorldTree::free_cell(uint32_t slot) {
+  Cell& cell = cells_[slot];
   const size_t mask = table_.size() - 1;
   size_t i = table_find(pack(cell.at));
   // Backward-shift deletion: pull later entries of the probe run into the gap
@@ -109,6 +146,7 @@ void WorldTree::leave_cell(uint32_t slot, uint32_t id) {
   }
   table_[i] = 0;
   --table_used_;
+  cell.linked = false;
   free_cells_.push_back(slot);
 }
 
@@ -118,27 +156,27 @@ void WorldTree::relink(uint32_t id, const Coord& lo, const Coord& hi, bool overf
   const bool was_overflow = e.present && e.overflow;
   if (was_overflow && !overflow) erase_sorted(overflow_ids_, id);
   if (overflow && !was_overflow) insert_sorted(overflow_ids_, id);
-  // Leave the cells outside the new range (all of them when going to overflow).
   if (e.cells.capacity() < kEntryReserve) e.cells.reserve(kEntryReserve);  // a box over 2x2x2 cells
-  size_t kept = 0;
-  for (uint32_t slot : e.cells) {
-    if (!overflow && inside(cells_[slot].at, lo, hi))
-      e.cells[kept++] = slot;
-    else
-      leave_cell(slot, id);
+  old_cells_.assign(e.cells.begin(), e.cells.end());
+  e.cells.clear();
+  // Leave the cells outside the new range (all of them when going to overflow).
+  if (was_linked) {
+    size_t i = 0;
+    for_each_cell(e.lo, e.hi, [&](const Coord& c) {
+      const uint32_t slot = old_cells_[i++];
+      if (overflow || !inside(c, lo, hi)) occupied_ += leave_cell(slot, id);
+    });
   }
-  e.cells.resize(kept);
-  if (!overflow) {
-    Coord c;
-    for (c[2] = lo[2]; c[2] <= hi[2]; ++c[2])
-      for (c[1] = lo[1]; c[1] <= hi[1]; ++c[1])
-        for (c[0] = lo[0]; c[0] <= hi[0]; ++c[0]) {
-          if (was_linked && inside(c, e.lo, e.hi)) continue;  // already there
-          const uint32_t slot = cell_slot(c);
-          enter_cell(slot, id);
-          e.cells.push_back(slot);
-        }
-  }
+  if (!overflow)
+    for_each_cell(lo, hi, [&](const Coord& c) {
+      if (was_linked && inside(c, e.lo, e.hi)) {  // already there
+        e.cells.push_back(old_cells_[index_in(c, e.lo, e.hi)]);
+        return;
+      }
+      const uint32_t slot = cell_slot(c);
+      occupied_ += enter_cell(slot, id);
+      e.cells.push_back(slot);
+    });
   e.lo = lo;
   e.hi = hi;
   e.overflow = overflow;
@@ -149,6 +187,12 @@ void WorldTree::relink(uint32_t id, const Coord& lo, const Coord& hi, bool overf
 bool WorldTree::update(uint32_t id, const Aabb& box) { return update_cells(id, cell_range(box)); }
 
 bool WorldTree::update_cells(uint32_t id, const CellRange& r) {
+  const bool changed = move_one(id, r);
+  drop_empty_cells();
+  return changed;
+}
+
+bool WorldTree::move_one(uint32_t id, const CellRange& r) {
   if (id >= entries_.size()) {
     entries_.resize(id + 1);
     lo_.resize(id + 1);
@@ -168,9 +212,146 @@ void WorldTree::remove(uint32_t id) {
   if (!contains(id)) return;
   Entry& e = entries_[id];
   if (e.overflow) erase_sorted(overflow_ids_, id);
-  for (uint32_t slot : e.cells) leave_cell(slot, id);
+  for (uint32_t slot : e.cells) occupied_ += leave_cell(slot, id);
   e = Entry{};
   erase_sorted(present_ids_, id);
+  drop_empty_cells();
+}
+
+// ---- the batch ----
+
+namespace {
+
+// Items per part of the per-object phases.
+constexpr size_t kMoveGrain = 256;
+
+template <class F>
+void for_ranges(WorldTree::Parallel& parallel, size_t count, size_t grain, const F& f) {
+  if (count == 0) return;
+  parallel.for_ranges(count, grain, [](const void* ctx, size_t b, size_t e) { (*static_cast<const F*>(ctx))(b, e); }, &f);
+}
+
+}  // namespace
+
+// Reads only: the cells `id` leaves (from its entry, no cell read) and the
+// slots of those it enters, when the table has them.
+void WorldTree::plan_move(uint32_t id, const CellRange& r, Move& m) const {
+  m.leaves = m.enters = m.missing = 0;
+  if (!needs_update(id, r)) {
+    m.kind = MoveKind::same;
+    return;
+  }
+  if (!contains(id) || entries_[id].overflow || r.overflow || cell_count(entries_[id].lo, entries_[id].hi) > kFastCells ||
+      cell_count(r.lo, r.hi) > kFastCells) {
+    m.kind = MoveKind::slow;
+    return;
+  }
+  const Entry& e = entries_[id];
+  m.kind = MoveKind::fast;
+  size_t i = 0;
+  for_each_cell(e.lo, e.hi, [&](const Coord& c) {
+    const uint32_t slot = e.cells[i++];
+    if (!inside(c, r.lo, r.hi)) m.leave[m.leaves++] = slot;
+  });
+  for_each_cell(r.lo, r.hi, [&](const Coord& c) {
+    if (inside(c, e.lo, e.hi)) return;
+    const size_t t = table_find(pack(c));  // the table is not empty: e has cells
+    if (table_[t] == 0) m.missing |= uint8_t(1u << m.enters);
+    m.enter[m.enters++] = uint32_t(table_[t]);
+  });
+}
+
+// The arrivals and departures of the cells of part `part`: the slots in
+// busy_ words w with w % parts == part, so every busy word has one writer.
+void WorldTree::apply_moves(std::span<const uint32_t> ids, size_t part, size_t parts) {
+  const uint32_t mask = uint32_t(parts - 1);
+  int occupied = 0;
+  for (size_t k = 0; k < ids.size(); ++k) {
+    Move& m = moves_[k];
+    if (m.kind != MoveKind::fast) continue;
+    for (int i = 0; i < m.leaves; ++i)
+      if (((m.leave[i] / 64) & mask) == part) {
+        const int left = leave_cell(m.leave[i], ids[k]);
+        m.emptied[i] = left != 0;  // this op's own byte: no other part writes it
+        occupied += left;
+      }
+    for (int i = 0; i < m.enters; ++i)
+      if (((m.enter[i] / 64) & mask) == part) occupied += enter_cell(m.enter[i], ids[k]);
+  }
+  std::atomic_ref<size_t>(occupied_).fetch_add(size_t(ptrdiff_t(occupied)), std::memory_order_relaxed);
+}
+
+// The object's own entry: its new cell list, in [lo, hi] order.
+void WorldTree::finish_move(uint32_t id, const CellRange& r, const Move& m) {
+  Entry& e = entries_[id];
+  std::array<uint32_t, kFastCells> old;
+  const size_t n = e.cells.size();
+  std::copy(e.cells.begin(), e.cells.end(), old.begin());
+  e.cells.clear();  // capacity kEntryReserve >= kFastCells: no allocation
+  size_t j = 0;
+  for_each_cell(r.lo, r.hi, [&](const Coord& c) {
+    e.cells.push_back(inside(c, e.lo, e.hi) ? old[index_in(c, e.lo, e.hi)] : m.enter[j++]);
+  });
+  assert(j == m.enters && n <= kFastCells);
+  (void)n;
+  e.lo = r.lo;
+  e.hi = r.hi;
+  lo_[id] = r.lo;
+}
+
+void WorldTree::update_cells(std::span<const uint32_t> ids, std::span<const CellRange> ranges, Parallel& parallel,
+                             size_t parts) {
+  assert(ids.size() == ranges.size());
+  assert(parts >= 1 && std::has_single_bit(parts));
+  const size_t n = ids.size();
+  // Sized for every object at once: grows with the world, not with a frame
+  // that moves more objects than the frames before.
+  if (moves_.size() < n) moves_.resize(std::max(n, entries_.size()));
+  // 1. What each object leaves and enters (reads only).
+  for_ranges(parallel, n, kMoveGrain, [&](size_t b, size_t e) {
+    for (size_t k = b; k < e; ++k) plan_move(ids[k], ranges[k], moves_[k]);
+  });
+  // 2. In k order: the one-by-one moves, and the cells new to the table
+  // (emptied cells stay in it, so every slot found in 1 is still right).
+  for (size_t k = 0; k < n; ++k) {
+    Move& m = moves_[k];
+    if (m.kind == MoveKind::slow) {
+      move_one(ids[k], ranges[k]);
+      continue;
+    }
+    if (m.kind != MoveKind::fast) continue;
+    ++reinsertions_;
+    if (m.missing == 0) continue;
+    const Entry& e = entries_[ids[k]];
+    int i = 0;
+    for_each_cell(ranges[k].lo, ranges[k].hi, [&](const Coord& c) {
+      if (inside(c, e.lo, e.hi)) return;
+      if (m.missing & (1u << i)) m.enter[i] = cell_slot(c);
+      ++i;
+    });
+  }
+  // 3. The cells, in parts of disjoint cells; 4. each object's entry.
+  for_ranges(parallel, parts, 1, [&](size_t b, size_t e) {
+    for (size_t p = b; p < e; ++p) apply_moves(ids, p, parts);
+  });
+  for_ranges(parallel, n, kMoveGrain, [&](size_t b, size_t e) {
+    for (size_t k = b; k < e; ++k)
+      if (moves_[k].kind == MoveKind::fast) finish_move(ids[k], ranges[k], moves_[k]);
+  });
+  // 5. The cells the moves emptied are freed, in k order (the free list, hence
+  // later numbering, does not depend on the parts), unless refilled: the free
+  // list then serves the next batch's new cells and the cells never outgrow
+  // the most ever occupied (a warmed-up frame allocates nothing). The slow
+  // moves' empties wait for drop_empty_cells.
+  for (size_t k = 0; k < n; ++k) {
+    const Move& m = moves_[k];
+    if (m.kind != MoveKind::fast) continue;
+    for (int i = 0; i < m.leaves; ++i) {
+      const uint32_t slot = m.leave[i];
+      if (m.emptied[i] && cells_[slot].linked && cells_[slot].ids.empty()) free_cell(slot);
+    }
+  }
+  drop_empty_cells();
 }
 
 namespace {
@@ -397,7 +578,7 @@ bool WorldTree::RayWalk::next() {
       }
       if (k == 3) enumerating_ = false;
       const size_t i = tree_->table_find(pack(c));
-      if (tree_->table_[i] != 0) {
+      if (tree_->table_[i] != 0 && !tree_->cells_[uint32_t(tree_->table_[i])].ids.empty()) {  // skip emptied cells
         at_ = c;
         slot_ = uint32_t(tree_->table_[i]);
         return true;

@@ -347,6 +347,11 @@ class OCTBAKE_API CollisionWorld {
   };
 
   Status check(ObjectHandle h) const;
+  // check(h) passes (inline: a handle check per set_pose).
+  bool valid(ObjectHandle h) const {
+    return h.world == id_ && h.slot < slots_.size() && h.generation != 0 && slots_[h.slot].live &&
+           slots_[h.slot].generation == h.generation;
+  }
   const ObjectTree& tree_of(const Slot& s) const;
   int max_depth_of(const Slot& s) const;
   void place_box(uint32_t slot);  // boxes_[slot] from the slot's pose and offset
@@ -405,6 +410,7 @@ class OCTBAKE_API CollisionWorld {
   // item that claimed it (duplicate check).
   enum : uint8_t { kUnmoved, kMoved, kNewlyDirty };
   std::vector<uint8_t> move_flags_;
+  std::vector<uint32_t> block_listed_;  // set_poses: per block of items, its newly dirty, then its offset in dirty_
   std::vector<WorldTree::CellRange> ranges_;  // commit_poses: per dirty_ entry
   std::vector<uint32_t> claim_;
   std::vector<PairResult> results_;

@@ -73,6 +73,32 @@ class OCTBAKE_API WorldTree {
   bool update_cells(uint32_t id, const CellRange& range);
   // Would update_cells(id, range) change anything (a new id, or other cells)?
   bool needs_update(uint32_t id, const CellRange& range) const;
+  // What the batch below runs its parts on: calls task(ctx, begin, end) on
+  // disjoint ranges covering [0, count) exactly once, on any threads, in any
+  // order, and returns when all are done.
+  class Parallel {
+   public:
+    virtual void for_ranges(size_t count, size_t grain, void (*task)(const void* ctx, size_t begin, size_t end),
+                            const void* ctx) = 0;
+
+   protected:
+    ~Parallel() = default;
+  };
+  // update_cells(ids[k], ranges[k]) for every k (ids distinct), mostly in
+  // parallel: each object works out the cells it leaves and enters (looked
+  // up, not yet changed); the cells new to the table are made, in k order;
+  // then the cells take their arrivals and departures in `parts` groups of
+  // disjoint cells (a power of two; 1 when running inline), and each object
+  // its new cell list; last the cells left empty are freed, in k order.
+  // Objects that are new, go to or from overflow, or span more than
+  // kFastCells cells take the one-by-one path, in k order. The cells'
+  // contents, pairs, queries and reinsertions after it equal those of the
+  // one-by-one calls whatever `parts` and `parallel` do; only the internal
+  // cell numbering may differ, and nothing observable depends on it (pairs
+  // and query answers are sorted, ray walks go by geometry). Allocates only
+  // to grow with the world.
+  static constexpr uint32_t kFastCells = 8;
+  void update_cells(std::span<const uint32_t> ids, std::span<const CellRange> ranges, Parallel& parallel, size_t parts);
   // overlapping_pairs in pieces: scan_part(k) for every k < scan_parts()
   // hands the cell pairs of its share of the cells to `sink`, in blocks,
   // every pair in exactly one part; finish_pairs, given all the parts' pairs
@@ -152,11 +178,23 @@ class OCTBAKE_API WorldTree {
     Coord lo{}, hi{};  // inclusive cell range, clamped to the grid
     bool present = false;
     bool overflow = false;
-    std::vector<uint32_t> cells;  // slots in cells_ (empty when overflow)
+    // Slots in cells_ of [lo, hi], z slowest, x fastest (so a slot's cell is
+    // known from its index without reading the cell); empty when overflow.
+    std::vector<uint32_t> cells;
   };
   struct Cell {
     Coord at{};
+    bool linked = false;        // in table_ (else on free_cells_)
     std::vector<uint32_t> ids;  // sorted ascending
+  };
+  // The batch update_cells: one object's cell changes.
+  enum class MoveKind : uint8_t { same, fast, slow };
+  struct Move {
+    MoveKind kind = MoveKind::same;
+    uint8_t leaves = 0, enters = 0;
+    uint8_t missing = 0;  // bit i: enter[i]'s cell was not in the table yet
+    std::array<uint32_t, kFastCells> leave, enter;  // slots (enter in [lo, hi] order)
+    std::array<bool, kFastCells> emptied;            // leave[i] left its cell empty
   };
 
   Coord cell_of(const Eigen::Vector3d& p) const;
@@ -170,11 +208,23 @@ class OCTBAKE_API WorldTree {
   // Moves `id` from the cells of entries_[id]'s range to those of [lo, hi],
   // touching only the cells that differ.
   void relink(uint32_t id, const Coord& lo, const Coord& hi, bool overflow);
-  void enter_cell(uint32_t slot, uint32_t id);
-  void leave_cell(uint32_t slot, uint32_t id);
+  bool move_one(uint32_t id, const CellRange& range);  // update_cells without dropping empty cells
+  // The batch's phases (see update_cells(ids, ...)).
+  void plan_move(uint32_t id, const CellRange& range, Move& m) const;
+  void apply_moves(std::span<const uint32_t> ids, size_t part, size_t parts);
+  void finish_move(uint32_t id, const CellRange& range, const Move& m);
+  // Both return the change in occupied_ (a cell becoming (non-)empty).
+  int enter_cell(uint32_t slot, uint32_t id);
+  int leave_cell(uint32_t slot, uint32_t id);
   uint32_t cell_slot(const Coord& at);  // finds or creates
   size_t table_find(uint32_t key) const;
   void table_grow();
+  // Emptied cells stay in the table while a batch runs (its plan holds slots
+  // looked up before); the batch frees those its fast moves emptied at its
+  // end, and the others (left by update(), remove() and slow moves) are
+  // dropped all at once when they outnumber the occupied ones.
+  void drop_empty_cells();
+  void free_cell(uint32_t slot);
 
   Aabb world_;
   int depth_;
@@ -195,6 +245,9 @@ class OCTBAKE_API WorldTree {
   // (packed coord + 1) << 32 | slot, 0 when empty. Never iterated.
   std::vector<uint64_t> table_;
   size_t table_used_ = 0;
+  size_t occupied_ = 0;  // cells holding an object (the rest of table_used_ are empty)
+  std::vector<Move> moves_;         // the batch's plan, per item
+  std::vector<uint32_t> old_cells_;  // relink's copy of an entry's cells
   std::vector<uint32_t> overflow_ids_;  // sorted
   std::vector<uint32_t> present_ids_;   // sorted
   mutable std::vector<std::pair<uint32_t, uint32_t>> sort_scratch_;  // candidate_pairs' radix sort

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -145,6 +146,116 @@ TEST_P(WorldTreeOracle, MatchesBruteForceThroughMovesAndRemovals) {
 
 // Depth 0: one cell (everything paired); 3: coarse; 6: boxes span many cells.
 INSTANTIATE_TEST_SUITE_P(Depths, WorldTreeOracle, ::testing::Values(0, 3, 6));
+
+// Runs the ranges in chunks of at most 7 items, last chunk first: a legal
+// schedule no real executor would pick.
+struct Backwards final : WorldTree::Parallel {
+  int calls = 0;
+  void for_ranges(size_t count, size_t grain, void (*task)(const void*, size_t, size_t), const void* ctx) override {
+    ++calls;
+    grain = std::clamp<size_t>(grain, 1, 7);
+    for (size_t end = count; end > 0;) {
+      const size_t begin = (end - 1) / grain * grain;
+      task(ctx, begin, end);
+      end = begin;
+    }
+  }
+};
+
+// What a caller can see of a tree: pairs, overflow, box queries and ray walks.
+struct Seen {
+  Pairs pairs;
+  std::vector<uint32_t> overflow;
+  std::vector<std::vector<uint32_t>> queries;
+  std::vector<std::tuple<std::array<uint16_t, 3>, double, std::vector<uint32_t>>> walked;
+  uint64_t reinsertions = 0;
+  bool operator==(const Seen&) const = default;
+};
+
+Seen seen(const WorldTree& tree, uint32_t seed) {
+  Seen s;
+  tree.candidate_pairs(s.pairs);
+  s.overflow = tree.overflow_ids();
+  s.reinsertions = tree.reinsertions();
+  std::mt19937 rng(seed);
+  std::vector<uint32_t> got;
+  for (int q = 0; q < 40; ++q) {
+    tree.query_box(random_box(rng, 14.0, q % 8 == 0 ? 12.0 : 2.0), got);
+    s.queries.push_back(got);
+  }
+  for (int r = 0; r < 20; ++r) {
+    const Eigen::Vector3d o(uniform(rng, -20, 20), uniform(rng, -20, 20), uniform(rng, -20, 20));
+    const Eigen::Vector3d d = Eigen::Vector3d(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1)).normalized();
+    WorldTree::RayWalk walk(tree, o, d, INFINITY);
+    while (walk.next()) s.walked.emplace_back(walk.cell(), walk.entry(), walk.ids());
+  }
+  return s;
+}
+
+class WorldTreeBatch : public ::testing::TestWithParam<int> {};
+
+// The batch update_cells, in 1, 2 and 8 parts on a backwards schedule, against
+// one-by-one updates and the brute-force oracle: new objects, objects going
+// to and from overflow, objects over more cells than the batch's fast path,
+// moves within a cell, to neighbours and across the world (cells emptied,
+// refilled and dropped), removals and re-insertions between batches.
+TEST_P(WorldTreeBatch, MatchesOneByOneUpdatesForEveryPartCount) {
+  const int depth = GetParam();
+  const Aabb world{{-10, -10, -10}, {10, 10, 10}};
+  const GridOracle grid{world, depth};
+  WorldTree one(world, depth);
+  const std::array<size_t, 3> parts{1, 2, 8};
+  std::vector<WorldTree> batched(parts.size(), WorldTree(world, depth));
+  Backwards backwards;
+  std::mt19937 rng(555 + depth);
+  const uint32_t n = 300;
+  std::vector<Aabb> boxes(n);
+  std::vector<bool> present(n, false);
+  // Mostly small boxes (2x2x2 cells or fewer at depth 6), a few large (more
+  // cells than the fast path, or overflow).
+  const auto new_box = [&](uint32_t i, const Aabb* from, double step) {
+    const double half = i % 40 == 0 ? 6.0 : i % 13 == 0 ? 1.0 : 0.12;
+    if (!from) return random_box(rng, 11.0, half);
+    const Eigen::Vector3d d(uniform(rng, -step, step), uniform(rng, -step, step), uniform(rng, -step, step));
+    Aabb b{from->min + d, from->max + d};
+    if (i % 29 == 0 && step > 1) b = random_box(rng, 11.0, 6.0);  // to or from overflow
+    return b;
+  };
+  size_t checked = 0;
+  for (int round = 0; round < 14; ++round) {
+    const double step = round % 3 == 0 ? 8.0 : round % 3 == 1 ? 0.4 : 0.05;
+    std::vector<uint32_t> ids;
+    for (uint32_t i = 0; i < n; ++i)
+      if (round == 0 || !present[i] || rng() % 2 == 0) ids.push_back(i);
+    std::shuffle(ids.begin(), ids.end(), rng);  // any order of distinct ids
+    std::vector<WorldTree::CellRange> ranges;
+    for (uint32_t i : ids) {
+      boxes[i] = new_box(i, present[i] ? &boxes[i] : nullptr, step);
+      present[i] = true;
+      one.update(i, boxes[i]);
+      ranges.push_back(one.cell_range(boxes[i]));
+    }
+    for (size_t t = 0; t < parts.size(); ++t) batched[t].update_cells(ids, ranges, backwards, parts[t]);
+    // Removals between batches, re-inserted by a later one.
+    if (round % 4 == 2)
+      for (uint32_t i = round; i < n; i += 11) {
+        one.remove(i);
+        for (WorldTree& b : batched) b.remove(i);
+        present[i] = false;
+      }
+    const Seen want = seen(one, round);
+    check_pairs(grid, boxes, present, want.pairs);
+    for (size_t t = 0; t < parts.size(); ++t) {
+      ASSERT_EQ(seen(batched[t], round), want) << parts[t] << " parts, round " << round;
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 14 * parts.size());
+  EXPECT_GT(backwards.calls, 0);
+  EXPECT_EQ(one.reinsertions() > 0, depth > 0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Depths, WorldTreeBatch, ::testing::Values(0, 3, 6));
 
 TEST(WorldTree, UpdateWithinSameCellsIsNotAChange) {
   WorldTree tree({{0, 0, 0}, {8, 8, 8}}, /*depth=*/3);  // unit cells
