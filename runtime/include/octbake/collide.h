@@ -6,9 +6,12 @@
 // axis test of two oriented boxes; the descent starts at the two roots and,
 // at every overlapping box pair that is not yet a leaf pair, splits ONE box:
 // the larger one (half diagonal in A's units; a tree already at its depth
-// cannot split). All occupied children of the split box are tested against
-// the other box in one go, and the overlapping ones are visited nearest first
-// (distance between box centres), depth first, with full backtracking. The
+// cannot split). Which box splits depends only on the two depths, so the
+// split schedule is worked out once per pair. All occupied children of the
+// split box are tested against the other box in one go, and the overlapping
+// ones are visited nearest first (distance between box centres; collide_all,
+// which visits every one, takes them in octant order), depth first, with full
+// backtracking. The
 // first overlapping leaf pair ends the descent (early out): that pair proves
 // the hit and is reported (children that are leaf pairs are reported where
 // they are tested, in the same nearest-first order, without being pushed).
