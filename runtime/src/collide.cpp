@@ -121,9 +121,9 @@ bool occupied(const ObjectTree& tree, int depth, const BoxCoord& c) {
 // (always 0 against radius 0). The pair is separated iff some |p_k| > r_k.
 //
 // children_overlap(parent, radius, offset, octant, n): the children
-// `octant[0..n)` of the split box against the other box. Child c's
-// projections are parent + offset[octant[c]] (the offsets already scaled to
-// the children's depth); bit c of the result is set iff child c overlaps
+// `octant[0..n)` of the split box against the other box. The projections of
+// the child in octant j are parent + offset[j] (the offsets already scaled to
+// the children's depth); bit j of the result is set iff that child overlaps
 // (radius: the two boxes' radii summed lane by lane). Nothing is stored: the
 // descent recomputes the same sums (child_projections) for the children it
 // visits. Three builds: plain C++, AVX2 and AVX-512. Each lane is one
@@ -144,9 +144,26 @@ struct Portable {
       const double* o = offset[octant[c]];
       bool separated = false;
       for (int k = 0; k < kLanes; ++k) separated |= std::abs(parent[k] + o[k]) > radius[k];
-      overlapping |= uint32_t(!separated) << c;
+      overlapping |= uint32_t(!separated) << octant[c];
     }
     return overlapping;
+  }
+
+  // Nearest first: order[0..) = the octants of `hits`, by key[octant]
+  // ascending, ties in octant order (a stable sort). Returns how many.
+  [[gnu::always_inline]] static int nearest_order(const double* key, uint32_t hits, uint8_t* order) {
+    int m = 0;
+    for (uint32_t rest = hits; rest != 0; rest &= rest - 1) {
+      const int j = std::countr_zero(rest);
+      int rank = 0;
+      for (uint32_t other = hits; other != 0; other &= other - 1) {
+        const int i = std::countr_zero(other);
+        rank += key[i] < key[j] || (key[i] == key[j] && i < j);
+      }
+      order[rank] = uint8_t(j);
+      ++m;
+    }
+    return m;
   }
 };
 
@@ -172,9 +189,27 @@ struct Avx2 {
         const __m256d q = _mm256_add_pd(p[k], _mm256_loadu_pd(o + 4 * k));
         separated = _mm256_or_pd(separated, _mm256_cmp_pd(_mm256_and_pd(q, not_sign), r[k], _CMP_GT_OQ));
       }
-      overlapping |= uint32_t(_mm256_testz_pd(separated, separated)) << c;  // no sign bit set
+      overlapping |= uint32_t(_mm256_testz_pd(separated, separated)) << octant[c];  // no sign bit set
     }
     return overlapping;
+  }
+
+  // As Portable::nearest_order: each rank counts the keys below (and the
+  // equal ones of lower octants) with two vector comparisons per half.
+  [[gnu::target("avx2")]] static int nearest_order(const double* key, uint32_t hits, uint8_t* order) {
+    const __m256d k0 = _mm256_loadu_pd(key), k1 = _mm256_loadu_pd(key + 4);
+    int m = 0;
+    for (uint32_t rest = hits; rest != 0; rest &= rest - 1) {
+      const int j = std::countr_zero(rest);
+      const __m256d kj = _mm256_broadcast_sd(key + j);
+      const uint32_t below = uint32_t(_mm256_movemask_pd(_mm256_cmp_pd(k0, kj, _CMP_LT_OQ))) |
+                             uint32_t(_mm256_movemask_pd(_mm256_cmp_pd(k1, kj, _CMP_LT_OQ))) << 4;
+      const uint32_t equal = uint32_t(_mm256_movemask_pd(_mm256_cmp_pd(k0, kj, _CMP_EQ_OQ))) |
+                             uint32_t(_mm256_movemask_pd(_mm256_cmp_pd(k1, kj, _CMP_EQ_OQ))) << 4;
+      order[std::popcount((below | (equal & ((1u << j) - 1))) & hits)] = uint8_t(j);
+      ++m;
+    }
+    return m;
   }
 };
 
@@ -192,9 +227,13 @@ struct Avx512 {
       const __m512d q1 = _mm512_add_pd(p1, _mm512_loadu_pd(o + 8));
       const __mmask8 separated = __mmask8(_mm512_cmp_pd_mask(_mm512_abs_pd(q0), r0, _CMP_GT_OQ) |
                                           _mm512_cmp_pd_mask(_mm512_abs_pd(q1), r1, _CMP_GT_OQ));
-      overlapping |= uint32_t(separated == 0) << c;
+      overlapping |= uint32_t(separated == 0) << octant[c];
     }
     return overlapping;
+  }
+
+  [[gnu::target("avx512f")]] static int nearest_order(const double* key, uint32_t hits, uint8_t* order) {
+    return Avx2::nearest_order(key, hits, order);
   }
 };
 #endif
@@ -303,6 +342,7 @@ struct Level {
 // Tables of one level, filled when the descent first expands a pair there.
 struct LevelTables {
   alignas(64) Lanes radius;   // radii of a child and of the other box, summed
+  alignas(32) double centre[3][8];  // lanes 0..2 of the offsets: centre[k][octant]
   const Lanes* offset;        // the children's offsets, octant order
 };
 
@@ -445,6 +485,8 @@ class PairFrame {
         }
       t.offset = scaled;
     }
+    for (int k = 0; k < 3; ++k)
+      for (int j = 0; j < 8; ++j) t.centre[k][j] = t.offset[j][k];
     filled_levels_ |= 1u << l;
   }
 
@@ -569,8 +611,10 @@ template <bool kFirstOnly, class K, class OnLeaf>
     uint32_t index[2];   // level indices, A's, B's
     uint32_t first;      // first child of the split box
     uint8_t next, count;  // children to visit: order[next..count)
-    uint8_t order[8];     // child ranks, visiting order
-    const uint8_t* octant;  // octant of each child rank
+    uint8_t order[8];     // their octants, visiting order
+    uint8_t mask;         // the split box's child mask
+    uint8_t split;        // the split side: 0 A, 1 B
+    const Lanes* offset;  // the children's offsets, octant order
   };
   Open open[kPathLevels + 1];
   frame.project({0, 0, 0}, 0, {0, 0, 0}, 0, open[0].p);
@@ -591,11 +635,11 @@ template <bool kFirstOnly, class K, class OnLeaf>
     const Level& lv = frame.level(l);
     const int side = lv.split_a ? 0 : 1;
     const uint32_t index = o.index[side];
-    const ObjectTree& tree = lv.split_a ? *a.tree : *b.tree;
     // The other box is a leaf and holds this one whole: any leaf below is a
     // proof (counted as the one box test it replaces).
     if (kFirstOnly && lv.other_leaf && frame.split_box_inside(o.p, lv)) {
       Coord leaf;
+      const ObjectTree& tree = lv.split_a ? *a.tree : *b.tree;
       if (some_leaf(tree, lv.split_a ? a.depth : b.depth, lv.d, index, unpack(o.coord[side]), leaf)) {
         ++result.box_tests;
         result.hit = true;
@@ -607,19 +651,24 @@ template <bool kFirstOnly, class K, class OnLeaf>
     const LevelTables& t = frame.tables(l);
     const uint8_t mask = lv.masks[index];
     const int count = kOctants.count[mask];
-    const uint8_t* octant = kOctants.octant[mask];
-    const uint32_t hits = PairFrame<K>::children_overlap(t, o.p, octant, count);
+    const uint32_t hits = PairFrame<K>::children_overlap(t, o.p, kOctants.octant[mask], count);  // by octant
     result.box_tests += uint64_t(count);
     o.next = o.count = 0;
     if (hits != 0) {
-      // Squared centre distance of child c (lanes 0..2: the offset in A's axes).
-      const auto distance = [&](int c) {
-        const double* q = t.offset[octant[c]];
-        const double x = o.p[0] + q[0], y = o.p[1] + q[1], z = o.p[2] + q[2];
-        return (x * x + y * y) + z * z;
-      };
-      const auto report = [&](int c) {
-        const Packed grown = child_of(o.coord[side], octant[c]);
+      // Squared centre distances of the children by octant (lanes 0..2: the
+      // offset in A's axes), the same sums as the kernel's.
+      alignas(32) double key[8];
+      if (kFirstOnly)
+        for (int h = 0; h < 8; h += 4) {
+          v4d x, y, z;
+          load4(x, t.centre[0] + h);
+          load4(y, t.centre[1] + h);
+          load4(z, t.centre[2] + h);
+          x = o.p[0] + x, y = o.p[1] + y, z = o.p[2] + z;
+          store4(key + h, (x * x + y * y) + z * z);
+        }
+      const auto report = [&](int j) {
+        const Packed grown = child_of(o.coord[side], uint8_t(j));
         lv.split_a ? on_leaf(unpack(grown), unpack(o.coord[1])) : on_leaf(unpack(o.coord[0]), unpack(grown));
       };
       if (l + 1 == levels) {
@@ -628,11 +677,9 @@ template <bool kFirstOnly, class K, class OnLeaf>
         result.hit = true;
         if (kFirstOnly) {
           int best = std::countr_zero(hits);
-          double best_key = distance(best);
           for (uint32_t rest = hits & (hits - 1); rest != 0; rest &= rest - 1) {
-            const int c = std::countr_zero(rest);
-            const double k = distance(c);
-            if (k < best_key) best = c, best_key = k;
+            const int j = std::countr_zero(rest);
+            if (key[j] < key[best]) best = j;
           }
           report(best);
           return;
@@ -641,22 +688,16 @@ template <bool kFirstOnly, class K, class OnLeaf>
       } else {
         int m = 0;
         if (kFirstOnly) {
-          // Nearest first: sorted by centre distance, ties in octant order.
-          double key[8];
-          for (uint32_t rest = hits; rest != 0; rest &= rest - 1) {
-            const int c = std::countr_zero(rest);
-            const double k = distance(c);
-            int at = m++;
-            for (; at > 0 && key[at - 1] > k; --at) o.order[at] = o.order[at - 1], key[at] = key[at - 1];
-            o.order[at] = uint8_t(c), key[at] = k;
-          }
+          m = K::nearest_order(key, hits, o.order);
         } else {
           // Every overlapping pair is visited: the order cannot matter.
           for (uint32_t rest = hits; rest != 0; rest &= rest - 1) o.order[m++] = uint8_t(std::countr_zero(rest));
         }
         o.count = uint8_t(m);
-        o.first = tree.first_child(lv.d, index);
-        o.octant = octant;
+        o.first = (lv.split_a ? *a.tree : *b.tree).first_child(lv.d, index);
+        o.mask = mask;
+        o.split = uint8_t(side);
+        o.offset = t.offset;
       }
     }
     // Back to the deepest level with a child left to visit.
@@ -664,11 +705,10 @@ template <bool kFirstOnly, class K, class OnLeaf>
       if (--l < 0) return;
     Open& parent = open[l];
     Open& child = open[l + 1];
-    const int c = parent.order[parent.next++];
-    const uint8_t j = parent.octant[c];
-    const int split = frame.level(l).split_a ? 0 : 1;
-    add_lanes(child.p, parent.p, frame.tables(l).offset[j]);
-    child.index[split] = parent.first + uint32_t(c);
+    const uint8_t j = parent.order[parent.next++];
+    const int split = parent.split;
+    add_lanes(child.p, parent.p, parent.offset[j]);
+    child.index[split] = parent.first + uint32_t(std::popcount(unsigned(parent.mask & ((1u << j) - 1))));
     child.coord[split] = child_of(parent.coord[split], j);
     child.index[1 - split] = parent.index[1 - split];
     child.coord[1 - split] = parent.coord[1 - split];
