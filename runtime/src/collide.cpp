@@ -628,10 +628,11 @@ template <bool kFirstOnly, class K, class OnLeaf>
   }
   open[0].coord[0] = open[0].coord[1] = 0;
   open[0].index[0] = open[0].index[1] = 0;
-  int l = 0;
+  Open* top = open;  // the pair open at the deepest level
   for (;;) {
     // Expand the pair open at level l.
-    Open& o = open[l];
+    Open& o = *top;
+    const int l = int(top - open);
     const Level& lv = frame.level(l);
     const int side = lv.split_a ? 0 : 1;
     const uint32_t index = o.index[side];
@@ -701,18 +702,17 @@ template <bool kFirstOnly, class K, class OnLeaf>
       }
     }
     // Back to the deepest level with a child left to visit.
-    while (open[l].next == open[l].count)
-      if (--l < 0) return;
-    Open& parent = open[l];
-    Open& child = open[l + 1];
+    while (top->next == top->count)
+      if (top-- == open) return;
+    Open& parent = *top;
+    Open& child = *++top;
     const uint8_t j = parent.order[parent.next++];
     const int split = parent.split;
     add_lanes(child.p, parent.p, parent.offset[j]);
+    child.index[0] = parent.index[0], child.index[1] = parent.index[1];
+    child.coord[0] = parent.coord[0], child.coord[1] = parent.coord[1];
     child.index[split] = parent.first + uint32_t(std::popcount(unsigned(parent.mask & ((1u << j) - 1))));
     child.coord[split] = child_of(parent.coord[split], j);
-    child.index[1 - split] = parent.index[1 - split];
-    child.coord[1 - split] = parent.coord[1 - split];
-    ++l;
   }
 }
 
