@@ -425,14 +425,28 @@ class PairFrame {
     const Eigen::Vector3d qb = b_min_ + kHalfPow[db] * b_size_.cwiseProduct(cell_center(cb));
     const Eigen::Vector3d t = (rel_.t + rel_.sr * qb) - qa;
     const Lanes* w = t_.w;
-    for (int k = 0; k < kLanes; ++k) p[k] = (w[0][k] * t[0] + w[1][k] * t[1]) + w[2][k] * t[2];
+    for (int k = 0; k < kLanes; k += 4) {
+      v4d w0, w1, w2;
+      load4(w0, w[0] + k);
+      load4(w1, w[1] + k);
+      load4(w2, w[2] + k);
+      store4(p + k, (w0 * t[0] + w1 * t[1]) + w2 * t[2]);
+    }
   }
 
   bool overlap(const double* p, int da, int db) const {
     const double *ra = radius_a(da), *rb = radius_b(db);
-    bool separated = false;
-    for (int k = 0; k < kLanes; ++k) separated |= std::abs(p[k]) > ra[k] + rb[k];
-    return !separated;
+    using v4l = int64_t __attribute__((vector_size(32)));
+    v4l separated{};
+    for (int k = 0; k < kLanes; k += 4) {
+      v4d pk, rak, rbk;
+      load4(pk, p + k);
+      load4(rak, ra + k);
+      load4(rbk, rb + k);
+      const v4d r = rak + rbk;
+      separated |= (pk > r) | (-pk > r);  // |p| > r (negation is exact)
+    }
+    return !(separated[0] | separated[1] | separated[2] | separated[3]);
   }
 
   // Does the padded box of one side lie inside the other's, with a margin of
@@ -485,8 +499,20 @@ class PairFrame {
         }
       t.offset = scaled;
     }
-    for (int k = 0; k < 3; ++k)
-      for (int j = 0; j < 8; ++j) t.centre[k][j] = t.offset[j][k];
+    // centre[k][j] = offset[j][k], k < 3: two 4x4 transpositions.
+    using v4l = int64_t __attribute__((vector_size(32)));
+    for (int h = 0; h < 8; h += 4) {
+      v4d r0, r1, r2, r3;
+      load4(r0, t.offset[h]);
+      load4(r1, t.offset[h + 1]);
+      load4(r2, t.offset[h + 2]);
+      load4(r3, t.offset[h + 3]);
+      const v4d t0 = __builtin_shuffle(r0, r1, v4l{0, 4, 2, 6}), t1 = __builtin_shuffle(r0, r1, v4l{1, 5, 3, 7});
+      const v4d t2 = __builtin_shuffle(r2, r3, v4l{0, 4, 2, 6}), t3 = __builtin_shuffle(r2, r3, v4l{1, 5, 3, 7});
+      store4(t.centre[0] + h, __builtin_shuffle(t0, t2, v4l{0, 1, 4, 5}));
+      store4(t.centre[1] + h, __builtin_shuffle(t1, t3, v4l{0, 1, 4, 5}));
+      store4(t.centre[2] + h, __builtin_shuffle(t0, t2, v4l{2, 3, 6, 7}));
+    }
     filled_levels_ |= 1u << l;
   }
 
