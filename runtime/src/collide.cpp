@@ -120,15 +120,17 @@ bool occupied(const ObjectTree& tree, int depth, const BoxCoord& c) {
 // 0..2, B's faces 3..5, edge pairs A_i x B_j at 6 + 3i + j, lane 15 idle
 // (always 0 against radius 0). The pair is separated iff some |p_k| > r_k.
 //
-// children_overlap(parent, radius, offset, octant, n): the children
-// `octant[0..n)` of the split box against the other box. The projections of
-// the child in octant j are parent + offset[j] (the offsets already scaled to
-// the children's depth); bit j of the result is set iff that child overlaps
-// (radius: the two boxes' radii summed lane by lane). Nothing is stored: the
-// descent recomputes the same sums (child_projections) for the children it
-// visits. Three builds: plain C++, AVX2 and AVX-512. Each lane is one
-// addition, one absolute value and one ordered comparison, so all three give
-// identical bits.
+// children_overlap<kScale>(parent, radius, offset, scale, octant, n): the
+// children `octant[0..n)` of the split box against the other box. The
+// projections of the child in octant j are parent + offset[j] * scale (scale
+// a power of two, so the product is exact) if kScale, else parent +
+// offset[j] (the offsets already scaled to the children's depth: the same
+// bits); bit j of the result is set iff that child overlaps (radius: the two
+// boxes' radii summed lane by lane). Nothing is stored: the descent
+// recomputes the same sums for the children it visits. Three builds: plain
+// C++, AVX2 and AVX-512. Each lane is at most one multiplication, one
+// addition, one absolute value and one ordered comparison (no fused
+// multiply-add), so all three give identical bits.
 //
 // Each build is a class whose kernel is inlined into the whole pair test,
 // which is compiled once per build and chosen once per pair (run_pair): no
@@ -137,13 +139,15 @@ constexpr int kLanes = 16;
 using Lanes = double[kLanes];
 
 struct Portable {
+  template <bool kScale>
   [[gnu::always_inline]] static uint32_t children_overlap(const double* parent, const double* radius,
-                                                          const Lanes* offset, const uint8_t* octant, int n) {
+                                                          const Lanes* offset, double scale, const uint8_t* octant,
+                                                          int n) {
     uint32_t overlapping = 0;
     for (int c = 0; c < n; ++c) {
       const double* o = offset[octant[c]];
       bool separated = false;
-      for (int k = 0; k < kLanes; ++k) separated |= std::abs(parent[k] + o[k]) > radius[k];
+      for (int k = 0; k < kLanes; ++k) separated |= std::abs(parent[k] + (kScale ? o[k] * scale : o[k])) > radius[k];
       overlapping |= uint32_t(!separated) << octant[c];
     }
     return overlapping;
@@ -171,10 +175,11 @@ struct Portable {
 #define OCTBAKE_X86_KERNELS 1
 
 struct Avx2 {
-  [[gnu::target("avx2")]] static uint32_t children_overlap(const double* parent,
-                                                                             const double* radius,
-                                                                             const Lanes* offset,
-                                                                             const uint8_t* octant, int n) {
+  template <bool kScale>
+  [[gnu::target("avx2")]] static uint32_t children_overlap(const double* parent, const double* radius,
+                                                         const Lanes* offset, double scale, const uint8_t* octant,
+                                                         int n) {
+    const __m256d s = _mm256_set1_pd(scale);
     const __m256d not_sign = _mm256_castsi256_pd(_mm256_set1_epi64x(INT64_MAX));  // |x| is one AND
     __m256d p[4], r[4];
     for (int k = 0; k < 4; ++k) {
@@ -186,7 +191,8 @@ struct Avx2 {
       const double* o = offset[octant[c]];
       __m256d separated = _mm256_setzero_pd();
       for (int k = 0; k < 4; ++k) {
-        const __m256d q = _mm256_add_pd(p[k], _mm256_loadu_pd(o + 4 * k));
+        const __m256d ok = _mm256_loadu_pd(o + 4 * k);
+        const __m256d q = _mm256_add_pd(p[k], kScale ? _mm256_mul_pd(ok, s) : ok);
         separated = _mm256_or_pd(separated, _mm256_cmp_pd(_mm256_and_pd(q, not_sign), r[k], _CMP_GT_OQ));
       }
       overlapping |= uint32_t(_mm256_testz_pd(separated, separated)) << octant[c];  // no sign bit set
@@ -214,17 +220,19 @@ struct Avx2 {
 };
 
 struct Avx512 {
-  [[gnu::target("avx512f")]] static uint32_t children_overlap(const double* parent,
-                                                                                const double* radius,
-                                                                                const Lanes* offset,
-                                                                                const uint8_t* octant, int n) {
+  template <bool kScale>
+  [[gnu::target("avx512f")]] static uint32_t children_overlap(const double* parent, const double* radius,
+                                                            const Lanes* offset, double scale,
+                                                            const uint8_t* octant, int n) {
+    const __m512d s = _mm512_set1_pd(scale);
     const __m512d p0 = _mm512_loadu_pd(parent), p1 = _mm512_loadu_pd(parent + 8);
     const __m512d r0 = _mm512_loadu_pd(radius), r1 = _mm512_loadu_pd(radius + 8);
     uint32_t overlapping = 0;
     for (int c = 0; c < n; ++c) {
       const double* o = offset[octant[c]];
-      const __m512d q0 = _mm512_add_pd(p0, _mm512_loadu_pd(o));
-      const __m512d q1 = _mm512_add_pd(p1, _mm512_loadu_pd(o + 8));
+      const __m512d o0 = _mm512_loadu_pd(o), o1 = _mm512_loadu_pd(o + 8);
+      const __m512d q0 = _mm512_add_pd(p0, kScale ? _mm512_mul_pd(o0, s) : o0);
+      const __m512d q1 = _mm512_add_pd(p1, kScale ? _mm512_mul_pd(o1, s) : o1);
       const __mmask8 separated = __mmask8(_mm512_cmp_pd_mask(_mm512_abs_pd(q0), r0, _CMP_GT_OQ) |
                                           _mm512_cmp_pd_mask(_mm512_abs_pd(q1), r1, _CMP_GT_OQ));
       overlapping |= uint32_t(separated == 0) << octant[c];
@@ -248,6 +256,8 @@ struct LaneTables {
   // Offsets of the 8 children at depth 1, octant order, per tree (filled when
   // the tree first splits): at depth d they are these times 2^(1-d), exactly.
   alignas(64) Lanes offset_a[8], offset_b[8];
+  // Their lanes 0..2 by octant (centre_a[k][j] = offset_a[j][k]): collide only.
+  alignas(32) double centre_a[3][8], centre_b[3][8];
   // Radius of a padded box on every axis at depth d: base * 2^-d + padding
   // (filled per depth when the descent first reaches it: most pair tests end
   // after a few depths).
@@ -295,13 +305,15 @@ using v4d_mem = double __attribute__((vector_size(32), aligned(8), may_alias));
   }
 }
 
-// out = a + b, 16 lanes (a child's projections: its parent's plus its offset).
-[[gnu::always_inline]] inline void add_lanes(double* out, const double* a, const double* b) {
+// out = a + b (times scale if kScale), 16 lanes: a child's projections, its
+// parent's plus its offset, as the kernel computes them.
+template <bool kScale>
+[[gnu::always_inline]] inline void add_lanes(double* out, const double* a, const double* b, double scale) {
   for (int k = 0; k < kLanes; k += 4) {
     v4d x, y;
     load4(x, a + k);
     load4(y, b + k);
-    store4(out + k, x + y);
+    store4(out + k, x + (kScale ? y * scale : y));
   }
 }
 
@@ -340,10 +352,13 @@ struct Level {
 };
 
 // Tables of one level, filled when the descent first expands a pair there.
+// collide_all (kScaled) scales the offsets once per level, and collide,
+// which mostly expands few pairs per level, in the kernel.
 struct LevelTables {
   alignas(64) Lanes radius;   // radii of a child and of the other box, summed
-  alignas(32) double centre[3][8];  // lanes 0..2 of the offsets: centre[k][octant]
-  const Lanes* offset;        // the children's offsets, octant order
+  const Lanes* offset;        // the children's offsets, octant order (times scale)
+  double scale;               // 1 if kScaled, else 2^-d
+  const double (*centre)[8];  // lanes 0..2 of the depth-1 offsets: centre[k][octant]
 };
 
 // ---- The pair frame --------------------------------------------------------
@@ -459,21 +474,25 @@ class PairFrame {
                       : inside(p, radius_b(lv.d), radius_a(lv.other), 0);
   }
 
-  // The tables of level l (filled on first use).
+  // The tables of level l (filled on first use; one descent uses the frame,
+  // so always the same kScaled).
+  template <bool kScaled>
   [[gnu::always_inline]] const LevelTables& tables(int l) const {
     if (!(filled_levels_ & (1u << l))) [[unlikely]]
-      fill_level(l);
+      fill_level<kScaled>(l);
     return level_tables_[l];
   }
 
   // Test the children of the split box of level l against the other box: see
   // children_overlap.
+  template <bool kScaled>
   [[gnu::always_inline]] static uint32_t children_overlap(const LevelTables& t, const double* parent,
                                                           const uint8_t* octant, int n) {
-    return K::children_overlap(parent, t.radius, t.offset, octant, n);
+    return K::template children_overlap<!kScaled>(parent, t.radius, t.offset, t.scale, octant, n);
   }
 
  private:
+  template <bool kScaled>
   void fill_level(int l) const {
     const Level& lv = level_[l];
     const double *ra = radius_a(lv.split_a ? lv.d + 1 : lv.other), *rb = radius_b(lv.split_a ? lv.other : lv.d + 1);
@@ -485,9 +504,11 @@ class PairFrame {
       store4(t.radius + k, x + y);
     }
     const Lanes* depth1 = lv.split_a ? offsets_a() : offsets_b();
-    if (lv.d == 0) {
-      t.offset = depth1;
-    } else {
+    t.offset = depth1;
+    t.scale = kHalfPow[lv.d];
+    if (!kScaled) {
+      t.centre = lv.split_a ? centres(t_.centre_a, depth1, 4u) : centres(t_.centre_b, depth1, 8u);
+    } else if (lv.d > 0) {
       // Scaled by a power of two: exact, the same bits as scaling in the kernel.
       const double h = kHalfPow[lv.d];
       Lanes* scaled = level_offsets_[l];
@@ -498,22 +519,33 @@ class PairFrame {
           store4(scaled[j] + k, x * h);
         }
       t.offset = scaled;
-    }
-    // centre[k][j] = offset[j][k], k < 3: two 4x4 transpositions.
-    using v4l = int64_t __attribute__((vector_size(32)));
-    for (int h = 0; h < 8; h += 4) {
-      v4d r0, r1, r2, r3;
-      load4(r0, t.offset[h]);
-      load4(r1, t.offset[h + 1]);
-      load4(r2, t.offset[h + 2]);
-      load4(r3, t.offset[h + 3]);
-      const v4d t0 = __builtin_shuffle(r0, r1, v4l{0, 4, 2, 6}), t1 = __builtin_shuffle(r0, r1, v4l{1, 5, 3, 7});
-      const v4d t2 = __builtin_shuffle(r2, r3, v4l{0, 4, 2, 6}), t3 = __builtin_shuffle(r2, r3, v4l{1, 5, 3, 7});
-      store4(t.centre[0] + h, __builtin_shuffle(t0, t2, v4l{0, 1, 4, 5}));
-      store4(t.centre[1] + h, __builtin_shuffle(t1, t3, v4l{0, 1, 4, 5}));
-      store4(t.centre[2] + h, __builtin_shuffle(t0, t2, v4l{2, 3, 6, 7}));
+      t.scale = 1;
+    } else {
+      t.scale = 1;
     }
     filled_levels_ |= 1u << l;
+  }
+
+  // centre[k][j] = offset[j][k], k < 3 (two 4x4 transpositions), filled once
+  // (flag `bit` of filled_offsets_).
+  const double (*centres(double (*centre)[8], const Lanes* offset, uint32_t bit) const)[8] {
+    if (!(filled_offsets_ & bit)) {
+      using v4l = int64_t __attribute__((vector_size(32)));
+      for (int h = 0; h < 8; h += 4) {
+        v4d r0, r1, r2, r3;
+        load4(r0, offset[h]);
+        load4(r1, offset[h + 1]);
+        load4(r2, offset[h + 2]);
+        load4(r3, offset[h + 3]);
+        const v4d t0 = __builtin_shuffle(r0, r1, v4l{0, 4, 2, 6}), t1 = __builtin_shuffle(r0, r1, v4l{1, 5, 3, 7});
+        const v4d t2 = __builtin_shuffle(r2, r3, v4l{0, 4, 2, 6}), t3 = __builtin_shuffle(r2, r3, v4l{1, 5, 3, 7});
+        store4(centre[0] + h, __builtin_shuffle(t0, t2, v4l{0, 1, 4, 5}));
+        store4(centre[1] + h, __builtin_shuffle(t1, t3, v4l{0, 1, 4, 5}));
+        store4(centre[2] + h, __builtin_shuffle(t0, t2, v4l{2, 3, 6, 7}));
+      }
+      filled_offsets_ |= bit;
+    }
+    return centre;
   }
 
   // The depth-1 child offsets of A's (B's) root, filled on first use.
@@ -640,7 +672,8 @@ template <bool kFirstOnly, class K, class OnLeaf>
     uint8_t order[8];     // their octants, visiting order
     uint8_t mask;         // the split box's child mask
     uint8_t split;        // the split side: 0 A, 1 B
-    const Lanes* offset;  // the children's offsets, octant order
+    const Lanes* offset;  // the children's offsets, octant order (times scale)
+    double scale;
   };
   Open open[kPathLevels + 1];
   frame.project({0, 0, 0}, 0, {0, 0, 0}, 0, open[0].p);
@@ -675,15 +708,15 @@ template <bool kFirstOnly, class K, class OnLeaf>
         return;
       }
     }
-    const LevelTables& t = frame.tables(l);
+    const LevelTables& t = frame.template tables<!kFirstOnly>(l);
     const uint8_t mask = lv.masks[index];
     const int count = kOctants.count[mask];
-    const uint32_t hits = PairFrame<K>::children_overlap(t, o.p, kOctants.octant[mask], count);  // by octant
+    const uint32_t hits = PairFrame<K>::template children_overlap<!kFirstOnly>(t, o.p, kOctants.octant[mask], count);
     result.box_tests += uint64_t(count);
     o.next = o.count = 0;
     if (hits != 0) {
       // Squared centre distances of the children by octant (lanes 0..2: the
-      // offset in A's axes), the same sums as the kernel's.
+      // offset in A's axes), the same sums as the kernel's (by octant).
       alignas(32) double key[8];
       if (kFirstOnly)
         for (int h = 0; h < 8; h += 4) {
@@ -691,7 +724,7 @@ template <bool kFirstOnly, class K, class OnLeaf>
           load4(x, t.centre[0] + h);
           load4(y, t.centre[1] + h);
           load4(z, t.centre[2] + h);
-          x = o.p[0] + x, y = o.p[1] + y, z = o.p[2] + z;
+          x = o.p[0] + x * t.scale, y = o.p[1] + y * t.scale, z = o.p[2] + z * t.scale;
           store4(key + h, (x * x + y * y) + z * z);
         }
       const auto report = [&](int j) {
@@ -725,6 +758,7 @@ template <bool kFirstOnly, class K, class OnLeaf>
         o.mask = mask;
         o.split = uint8_t(side);
         o.offset = t.offset;
+        o.scale = t.scale;
       }
     }
     // Back to the deepest level with a child left to visit.
@@ -734,7 +768,7 @@ template <bool kFirstOnly, class K, class OnLeaf>
     Open& child = *++top;
     const uint8_t j = parent.order[parent.next++];
     const int split = parent.split;
-    add_lanes(child.p, parent.p, parent.offset[j]);
+    add_lanes<kFirstOnly>(child.p, parent.p, parent.offset[j], parent.scale);
     child.index[0] = parent.index[0], child.index[1] = parent.index[1];
     child.coord[0] = parent.coord[0], child.coord[1] = parent.coord[1];
     child.index[split] = parent.first + uint32_t(std::popcount(unsigned(parent.mask & ((1u << j) - 1))));
