@@ -120,14 +120,17 @@ bool occupied(const ObjectTree& tree, int depth, const BoxCoord& c) {
 // 0..2, B's faces 3..5, edge pairs A_i x B_j at 6 + 3i + j, lane 15 idle
 // (always 0 against radius 0). The pair is separated iff some |p_k| > r_k.
 //
-// children_overlap(parent, ra, rb, offset, scale, octant, n, out): the
-// children `octant[0..n)` of the split box against the other box. Child c's
-// projections are parent + scale * offset[octant[c]] (scale a power of two,
-// so the product is exact), written to out[c]; bit c of the result is set
-// iff child c overlaps (radii ra + rb lane by lane). Three builds: plain C++,
-// AVX2 and AVX-512. Each lane is one multiplication, one addition, one
-// absolute value and one ordered comparison (no fused multiply-add), so all
-// three give identical bits.
+// children_overlap<kScale>(parent, radius, offset, scale, octant, n): the
+// children `octant[0..n)` of the split box against the other box. The
+// projections of the child in octant j are parent + offset[j] * scale (scale
+// a power of two, so the product is exact) if kScale, else parent +
+// offset[j] (the offsets already scaled to the children's depth: the same
+// bits); bit j of the result is set iff that child overlaps (radius: the two
+// boxes' radii summed lane by lane). Nothing is stored: the descent
+// recomputes the same sums for the children it visits. Three builds: plain
+// C++, AVX2 and AVX-512. Each lane is at most one multiplication, one
+// addition, one absolute value and one ordered comparison (no fused
+// multiply-add), so all three give identical bits.
 //
 // Each build is a class whose kernel is inlined into the whole pair test,
 // which is compiled once per build and chosen once per pair (run_pair): no
@@ -136,22 +139,35 @@ constexpr int kLanes = 16;
 using Lanes = double[kLanes];
 
 struct Portable {
-  [[gnu::always_inline]] static uint32_t children_overlap(const double* parent, const double* ra, const double* rb,
+  template <bool kScale>
+  [[gnu::always_inline]] static uint32_t children_overlap(const double* parent, const double* radius,
                                                           const Lanes* offset, double scale, const uint8_t* octant,
-                                                          int n, Lanes* out) {
-    double radius[kLanes];
-    for (int k = 0; k < kLanes; ++k) radius[k] = ra[k] + rb[k];
+                                                          int n) {
     uint32_t overlapping = 0;
     for (int c = 0; c < n; ++c) {
       const double* o = offset[octant[c]];
       bool separated = false;
-      for (int k = 0; k < kLanes; ++k) {
-        out[c][k] = parent[k] + o[k] * scale;
-        separated |= std::abs(out[c][k]) > radius[k];
-      }
-      overlapping |= uint32_t(!separated) << c;
+      for (int k = 0; k < kLanes; ++k) separated |= std::abs(parent[k] + (kScale ? o[k] * scale : o[k])) > radius[k];
+      overlapping |= uint32_t(!separated) << octant[c];
     }
     return overlapping;
+  }
+
+  // Nearest first: order[0..) = the octants of `hits`, by key[octant]
+  // ascending, ties in octant order (a stable sort). Returns how many.
+  [[gnu::always_inline]] static int nearest_order(const double* key, uint32_t hits, uint8_t* order) {
+    int m = 0;
+    for (uint32_t rest = hits; rest != 0; rest &= rest - 1) {
+      const int j = std::countr_zero(rest);
+      int rank = 0;
+      for (uint32_t other = hits; other != 0; other &= other - 1) {
+        const int i = std::countr_zero(other);
+        rank += key[i] < key[j] || (key[i] == key[j] && i < j);
+      }
+      order[rank] = uint8_t(j);
+      ++m;
+    }
+    return m;
   }
 };
 
@@ -159,65 +175,89 @@ struct Portable {
 #define OCTBAKE_X86_KERNELS 1
 
 struct Avx2 {
-  [[gnu::target("avx2")]] static uint32_t children_overlap(const double* parent, const double* ra, const double* rb,
+  template <bool kScale>
+  [[gnu::target("avx2")]] static uint32_t children_overlap(const double* parent, const double* radius,
                                                          const Lanes* offset, double scale, const uint8_t* octant,
-                                                         int n, Lanes* out) {
+                                                         int n) {
     const __m256d s = _mm256_set1_pd(scale);
     const __m256d not_sign = _mm256_castsi256_pd(_mm256_set1_epi64x(INT64_MAX));  // |x| is one AND
     __m256d p[4], r[4];
     for (int k = 0; k < 4; ++k) {
       p[k] = _mm256_loadu_pd(parent + 4 * k);
-      r[k] = _mm256_add_pd(_mm256_loadu_pd(ra + 4 * k), _mm256_loadu_pd(rb + 4 * k));
+      r[k] = _mm256_loadu_pd(radius + 4 * k);
     }
     uint32_t overlapping = 0;
     for (int c = 0; c < n; ++c) {
       const double* o = offset[octant[c]];
       __m256d separated = _mm256_setzero_pd();
       for (int k = 0; k < 4; ++k) {
-        const __m256d q = _mm256_add_pd(p[k], _mm256_mul_pd(_mm256_loadu_pd(o + 4 * k), s));
-        _mm256_storeu_pd(out[c] + 4 * k, q);
+        const __m256d ok = _mm256_loadu_pd(o + 4 * k);
+        const __m256d q = _mm256_add_pd(p[k], kScale ? _mm256_mul_pd(ok, s) : ok);
         separated = _mm256_or_pd(separated, _mm256_cmp_pd(_mm256_and_pd(q, not_sign), r[k], _CMP_GT_OQ));
       }
-      overlapping |= uint32_t(_mm256_movemask_pd(separated) == 0) << c;
+      overlapping |= uint32_t(_mm256_testz_pd(separated, separated)) << octant[c];  // no sign bit set
     }
     return overlapping;
+  }
+
+  // As Portable::nearest_order: each rank counts the keys below (and the
+  // equal ones of lower octants) with two vector comparisons per half.
+  [[gnu::target("avx2")]] static int nearest_order(const double* key, uint32_t hits, uint8_t* order) {
+    const __m256d k0 = _mm256_loadu_pd(key), k1 = _mm256_loadu_pd(key + 4);
+    int m = 0;
+    for (uint32_t rest = hits; rest != 0; rest &= rest - 1) {
+      const int j = std::countr_zero(rest);
+      const __m256d kj = _mm256_broadcast_sd(key + j);
+      const uint32_t below = uint32_t(_mm256_movemask_pd(_mm256_cmp_pd(k0, kj, _CMP_LT_OQ))) |
+                             uint32_t(_mm256_movemask_pd(_mm256_cmp_pd(k1, kj, _CMP_LT_OQ))) << 4;
+      const uint32_t equal = uint32_t(_mm256_movemask_pd(_mm256_cmp_pd(k0, kj, _CMP_EQ_OQ))) |
+                             uint32_t(_mm256_movemask_pd(_mm256_cmp_pd(k1, kj, _CMP_EQ_OQ))) << 4;
+      order[std::popcount((below | (equal & ((1u << j) - 1))) & hits)] = uint8_t(j);
+      ++m;
+    }
+    return m;
   }
 };
 
 struct Avx512 {
-  [[gnu::target("avx512f")]] static uint32_t children_overlap(
-      const double* parent, const double* ra, const double* rb, const Lanes* offset, double scale,
-      const uint8_t* octant, int n, Lanes* out) {
+  template <bool kScale>
+  [[gnu::target("avx512f")]] static uint32_t children_overlap(const double* parent, const double* radius,
+                                                            const Lanes* offset, double scale,
+                                                            const uint8_t* octant, int n) {
     const __m512d s = _mm512_set1_pd(scale);
     const __m512d p0 = _mm512_loadu_pd(parent), p1 = _mm512_loadu_pd(parent + 8);
-    const __m512d r0 = _mm512_add_pd(_mm512_loadu_pd(ra), _mm512_loadu_pd(rb));
-    const __m512d r1 = _mm512_add_pd(_mm512_loadu_pd(ra + 8), _mm512_loadu_pd(rb + 8));
+    const __m512d r0 = _mm512_loadu_pd(radius), r1 = _mm512_loadu_pd(radius + 8);
     uint32_t overlapping = 0;
     for (int c = 0; c < n; ++c) {
       const double* o = offset[octant[c]];
-      const __m512d q0 = _mm512_add_pd(p0, _mm512_mul_pd(_mm512_loadu_pd(o), s));
-      const __m512d q1 = _mm512_add_pd(p1, _mm512_mul_pd(_mm512_loadu_pd(o + 8), s));
-      _mm512_storeu_pd(out[c], q0);
-      _mm512_storeu_pd(out[c] + 8, q1);
+      const __m512d o0 = _mm512_loadu_pd(o), o1 = _mm512_loadu_pd(o + 8);
+      const __m512d q0 = _mm512_add_pd(p0, kScale ? _mm512_mul_pd(o0, s) : o0);
+      const __m512d q1 = _mm512_add_pd(p1, kScale ? _mm512_mul_pd(o1, s) : o1);
       const __mmask8 separated = __mmask8(_mm512_cmp_pd_mask(_mm512_abs_pd(q0), r0, _CMP_GT_OQ) |
                                           _mm512_cmp_pd_mask(_mm512_abs_pd(q1), r1, _CMP_GT_OQ));
-      overlapping |= uint32_t(separated == 0) << c;
+      overlapping |= uint32_t(separated == 0) << octant[c];
     }
     return overlapping;
+  }
+
+  [[gnu::target("avx512f")]] static int nearest_order(const double* key, uint32_t hits, uint8_t* order) {
+    return Avx2::nearest_order(key, hits, order);
   }
 };
 #endif
 
 // ---- Per-pair lane tables -------------------------------------------------
-// Built once per pair test from the relative placement, inside the pair test's
+// Built per pair test from the relative placement, inside the pair test's
 // build (so at its vector width); the same operations in the same order in
 // every build, so every build gives the same bits.
 struct LaneTables {
   // w[m][k]: weight of t_m in projection k (p = W t).
   alignas(64) Lanes w[3];
-  // Offsets of the 8 children at depth 1, octant order: at depth d they are
-  // these times 2^(1-d), exactly.
+  // Offsets of the 8 children at depth 1, octant order, per tree (filled when
+  // the tree first splits): at depth d they are these times 2^(1-d), exactly.
   alignas(64) Lanes offset_a[8], offset_b[8];
+  // Their lanes 0..2 by octant (centre_a[k][j] = offset_a[j][k]): collide only.
+  alignas(32) double centre_a[3][8], centre_b[3][8];
   // Radius of a padded box on every axis at depth d: base * 2^-d + padding
   // (filled per depth when the descent first reaches it: most pair tests end
   // after a few depths).
@@ -265,6 +305,18 @@ using v4d_mem = double __attribute__((vector_size(32), aligned(8), may_alias));
   }
 }
 
+// out = a + b (times scale if kScale), 16 lanes: a child's projections, its
+// parent's plus its offset, as the kernel computes them.
+template <bool kScale>
+[[gnu::always_inline]] inline void add_lanes(double* out, const double* a, const double* b, double scale) {
+  for (int k = 0; k < kLanes; k += 4) {
+    v4d x, y;
+    load4(x, a + k);
+    load4(y, b + k);
+    store4(out + k, x + (kScale ? y * scale : y));
+  }
+}
+
 std::atomic<BoxKernel> chosen_kernel{BoxKernel::best};
 
 bool cpu_has(BoxKernel k) {
@@ -285,9 +337,34 @@ bool cpu_has(BoxKernel k) {
   return false;
 }
 
+constexpr int kPathLevels = 2 * kMaxDepth;
+
+// One step of the descent. Which box splits depends only on the two depths
+// (da, db), and every step adds one to da + db, so all box pairs at path
+// level L = da + db have the same depths and split the same side: the split
+// schedule is one entry per level, worked out once per pair.
+struct Level {
+  bool split_a;     // A's box splits (else B's)
+  bool other_leaf;  // the other box is a leaf (containment early out)
+  uint8_t d;        // depth of the split box (its children: d + 1)
+  uint8_t other;    // depth of the other box
+  const uint8_t* masks;  // child masks of the split tree at depth d
+};
+
+// Tables of one level, filled when the descent first expands a pair there.
+// collide_all (kScaled) scales the offsets once per level, and collide,
+// which mostly expands few pairs per level, in the kernel.
+struct LevelTables {
+  alignas(64) Lanes radius;   // radii of a child and of the other box, summed
+  const Lanes* offset;        // the children's offsets, octant order (times scale)
+  double scale;               // 1 if kScaled, else 2^-d
+  const double (*centre)[8];  // lanes 0..2 of the depth-1 offsets: centre[k][octant]
+};
+
 // ---- The pair frame --------------------------------------------------------
-// Per pair: the projection matrix W (p = W t), the child offsets, and per
-// depth and tree, lazily, the 16-lane radii.
+// Per pair: the projection matrix W (p = W t), the split schedule, and
+// lazily: per tree the depth-1 child offsets, per depth and tree the 16-lane
+// radii, per level the summed radii and scaled offsets.
 template <class K>
 class PairFrame {
  public:
@@ -330,34 +407,32 @@ class PairFrame {
     b_min_ = bb.min;
     a_size_ = ba.max - ba.min;
     b_size_ = bb.max - bb.min;
-    size_a_ = (0.5 * a_size_).squaredNorm();
-    size_b_ = (0.5 * rel_.s * b_size_).squaredNorm();
-    double quarter_a[3], quarter_b[3], half_a[3], half_b[3];
+    double half_a[3], half_b[3];
     for (int i = 0; i < 3; ++i) {
-      quarter_a[i] = 0.25 * a_size_[i];
-      quarter_b[i] = 0.25 * b_size_[i];
       half_a[i] = 0.5 * a_size_[i];
       half_b[i] = 0.5 * rel_.s * b_size_[i];
     }
-    // B's local axis j moves its centre by sR e_j in A's frame.
-    const Eigen::Matrix3d& sr = rel_.sr;
-    v4d wb[3][4];
-    for (int c = 0; c < 4; ++c)
-      for (int j = 0; j < 3; ++j) wb[j][c] = (w[0][c] * sr(0, j) + w[1][c] * sr(1, j)) + w[2][c] * sr(2, j);
-    // t = centre B - centre A: A's child moving by +q moves t by -q.
-    fill_offsets(t_.offset_a, w, quarter_a, -1.0);
-    fill_offsets(t_.offset_b, wb, quarter_b, 1.0);
     fill_radii(t_.base_a, t_.padding_a, aw, half_a, rel_.pad);
     fill_radii(t_.base_b, t_.padding_b, bw, half_b, rel_.pad);
+    // The split schedule: the larger box splits (half diagonals in A's units,
+    // both halving with each depth; a tree already at its depth cannot).
+    const double size_a = (0.5 * a_size_).squaredNorm(), size_b = (0.5 * rel_.s * b_size_).squaredNorm();
+    levels_ = a.depth + b.depth;
+    int da = 0, db = 0;
+    for (int l = 0; l < levels_; ++l) {
+      const bool sa = da < a.depth && (db == b.depth || size_a * kHalfPow[2 * da] >= size_b * kHalfPow[2 * db]);
+      Level& lv = level_[l];
+      lv.split_a = sa;
+      lv.d = uint8_t(sa ? da : db);
+      lv.other = uint8_t(sa ? db : da);
+      lv.other_leaf = sa ? db == b.depth : da == a.depth;
+      lv.masks = (sa ? a.tree : b.tree)->masks().masks[size_t(lv.d)].data();
+      (sa ? da : db) += 1;
+    }
   }
 
-  // Split A rather than B at depths (da, db)? The larger box splits (half
-  // diagonals in A's units, both halving with each depth).
-  bool split_a(int da, int db) const {
-    if (da == depth_a_) return false;
-    if (db == depth_b_) return true;
-    return size_a_ * kHalfPow[2 * da] >= size_b_ * kHalfPow[2 * db];  // both exact
-  }
+  int levels() const { return levels_; }
+  const Level& level(int l) const { return level_[l]; }
 
   // Projections of box pair (A's ca at da, B's cb at db).
   void project(const Coord& ca, int da, const Coord& cb, int db, Lanes& p) const {
@@ -365,33 +440,144 @@ class PairFrame {
     const Eigen::Vector3d qb = b_min_ + kHalfPow[db] * b_size_.cwiseProduct(cell_center(cb));
     const Eigen::Vector3d t = (rel_.t + rel_.sr * qb) - qa;
     const Lanes* w = t_.w;
-    for (int k = 0; k < kLanes; ++k) p[k] = (w[0][k] * t[0] + w[1][k] * t[1]) + w[2][k] * t[2];
+    for (int k = 0; k < kLanes; k += 4) {
+      v4d w0, w1, w2;
+      load4(w0, w[0] + k);
+      load4(w1, w[1] + k);
+      load4(w2, w[2] + k);
+      store4(p + k, (w0 * t[0] + w1 * t[1]) + w2 * t[2]);
+    }
   }
 
   bool overlap(const double* p, int da, int db) const {
     const double *ra = radius_a(da), *rb = radius_b(db);
-    bool separated = false;
-    for (int k = 0; k < kLanes; ++k) separated |= std::abs(p[k]) > ra[k] + rb[k];
-    return !separated;
+    using v4l = int64_t __attribute__((vector_size(32)));
+    v4l separated{};
+    for (int k = 0; k < kLanes; k += 4) {
+      v4d pk, rak, rbk;
+      load4(pk, p + k);
+      load4(rak, ra + k);
+      load4(rbk, rb + k);
+      const v4d r = rak + rbk;
+      separated |= (pk > r) | (-pk > r);  // |p| > r (negation is exact)
+    }
+    return !(separated[0] | separated[1] | separated[2] | separated[3]);
   }
 
   // Does the padded box of one side lie inside the other's, with a margin of
   // one pad for rounding? Then every leaf under the inner box overlaps the
   // outer box. Checked on the outer box's face axes (lanes 0..2 for A, 3..5
   // for B), where the inner box's radius bounds its extent (|R| padded).
-  bool b_inside_a(const double* p, int da, int db) const { return inside(p, radius_b(db), radius_a(da), 0); }
-  bool a_inside_b(const double* p, int da, int db) const { return inside(p, radius_a(da), radius_b(db), 3); }
+  // Here: does the box about to split at level l lie inside the other one?
+  bool split_box_inside(const double* p, const Level& lv) const {
+    return lv.split_a ? inside(p, radius_a(lv.d), radius_b(lv.other), 3)
+                      : inside(p, radius_b(lv.d), radius_a(lv.other), 0);
+  }
 
-  // Test the children of A's box (split_a) or B's box at depth d against the
-  // other box at its depth `other`: see children_overlap.
-  [[gnu::always_inline]] uint32_t children_overlap(bool split_a, int d, int other, const double* parent,
-                                                   const uint8_t* octant, int n, Lanes* out) const {
-    const double scale = kHalfPow[d];  // children at depth d + 1
-    return split_a ? K::children_overlap(parent, radius_a(d + 1), radius_b(other), t_.offset_a, scale, octant, n, out)
-                   : K::children_overlap(parent, radius_a(other), radius_b(d + 1), t_.offset_b, scale, octant, n, out);
+  // The tables of level l (filled on first use; one descent uses the frame,
+  // so always the same kScaled).
+  template <bool kScaled>
+  [[gnu::always_inline]] const LevelTables& tables(int l) const {
+    if (!(filled_levels_ & (1u << l))) [[unlikely]]
+      fill_level<kScaled>(l);
+    return level_tables_[l];
+  }
+
+  // Test the children of the split box of level l against the other box: see
+  // children_overlap.
+  template <bool kScaled>
+  [[gnu::always_inline]] static uint32_t children_overlap(const LevelTables& t, const double* parent,
+                                                          const uint8_t* octant, int n) {
+    return K::template children_overlap<!kScaled>(parent, t.radius, t.offset, t.scale, octant, n);
   }
 
  private:
+  template <bool kScaled>
+  void fill_level(int l) const {
+    const Level& lv = level_[l];
+    const double *ra = radius_a(lv.split_a ? lv.d + 1 : lv.other), *rb = radius_b(lv.split_a ? lv.other : lv.d + 1);
+    LevelTables& t = level_tables_[l];
+    for (int k = 0; k < kLanes; k += 4) {
+      v4d x, y;
+      load4(x, ra + k);
+      load4(y, rb + k);
+      store4(t.radius + k, x + y);
+    }
+    const Lanes* depth1 = lv.split_a ? offsets_a() : offsets_b();
+    t.offset = depth1;
+    t.scale = kHalfPow[lv.d];
+    if (!kScaled) {
+      t.centre = lv.split_a ? centres(t_.centre_a, depth1, 4u) : centres(t_.centre_b, depth1, 8u);
+    } else if (lv.d > 0) {
+      // Scaled by a power of two: exact, the same bits as scaling in the kernel.
+      const double h = kHalfPow[lv.d];
+      Lanes* scaled = level_offsets_[l];
+      for (int j = 0; j < 8; ++j)
+        for (int k = 0; k < kLanes; k += 4) {
+          v4d x;
+          load4(x, depth1[j] + k);
+          store4(scaled[j] + k, x * h);
+        }
+      t.offset = scaled;
+      t.scale = 1;
+    } else {
+      t.scale = 1;
+    }
+    filled_levels_ |= 1u << l;
+  }
+
+  // centre[k][j] = offset[j][k], k < 3 (two 4x4 transpositions), filled once
+  // (flag `bit` of filled_offsets_).
+  const double (*centres(double (*centre)[8], const Lanes* offset, uint32_t bit) const)[8] {
+    if (!(filled_offsets_ & bit)) {
+      using v4l = int64_t __attribute__((vector_size(32)));
+      for (int h = 0; h < 8; h += 4) {
+        v4d r0, r1, r2, r3;
+        load4(r0, offset[h]);
+        load4(r1, offset[h + 1]);
+        load4(r2, offset[h + 2]);
+        load4(r3, offset[h + 3]);
+        const v4d t0 = __builtin_shuffle(r0, r1, v4l{0, 4, 2, 6}), t1 = __builtin_shuffle(r0, r1, v4l{1, 5, 3, 7});
+        const v4d t2 = __builtin_shuffle(r2, r3, v4l{0, 4, 2, 6}), t3 = __builtin_shuffle(r2, r3, v4l{1, 5, 3, 7});
+        store4(centre[0] + h, __builtin_shuffle(t0, t2, v4l{0, 1, 4, 5}));
+        store4(centre[1] + h, __builtin_shuffle(t1, t3, v4l{0, 1, 4, 5}));
+        store4(centre[2] + h, __builtin_shuffle(t0, t2, v4l{2, 3, 6, 7}));
+      }
+      filled_offsets_ |= bit;
+    }
+    return centre;
+  }
+
+  // The depth-1 child offsets of A's (B's) root, filled on first use.
+  const Lanes* offsets_a() const {
+    if (!(filled_offsets_ & 1u)) {
+      v4d w[3][4];
+      for (int m = 0; m < 3; ++m)
+        for (int c = 0; c < 4; ++c) load4(w[m][c], t_.w[m] + 4 * c);
+      const double quarter[3] = {0.25 * a_size_[0], 0.25 * a_size_[1], 0.25 * a_size_[2]};
+      // t = centre B - centre A: A's child moving by +q moves t by -q.
+      fill_offsets(t_.offset_a, w, quarter, -1.0);
+      filled_offsets_ |= 1u;
+    }
+    return t_.offset_a;
+  }
+  const Lanes* offsets_b() const {
+    if (!(filled_offsets_ & 2u)) {
+      v4d w[3][4];
+      for (int m = 0; m < 3; ++m)
+        for (int c = 0; c < 4; ++c) load4(w[m][c], t_.w[m] + 4 * c);
+      // B's local axis j moves its centre by sR e_j in A's frame.
+      const Eigen::Matrix3d& sr = rel_.sr;
+      v4d wb[3][4];
+      for (int c = 0; c < 4; ++c)
+        for (int j = 0; j < 3; ++j) wb[j][c] = (w[0][c] * sr(0, j) + w[1][c] * sr(1, j)) + w[2][c] * sr(2, j);
+      const double quarter[3] = {0.25 * b_size_[0], 0.25 * b_size_[1], 0.25 * b_size_[2]};
+      fill_offsets(t_.offset_b, wb, quarter, 1.0);
+      filled_offsets_ |= 2u;
+    }
+    return t_.offset_b;
+  }
+
   // The 16-lane radii of A's (B's) boxes at depth d, filled on first use.
   const double* radius_a(int d) const { return radius(d, t_.base_a, t_.padding_a, radius_a_, filled_a_); }
   const double* radius_b(int d) const { return radius(d, t_.base_b, t_.padding_b, radius_b_, filled_b_); }
@@ -417,28 +603,16 @@ class PairFrame {
   }
 
   Relative rel_;
-  int depth_a_, depth_b_;
+  int depth_a_, depth_b_, levels_;
   Eigen::Vector3d a_min_, b_min_, a_size_, b_size_;  // root sizes
-  double size_a_, size_b_;                          // squared root half diagonals, A's units
-  LaneTables t_;
-  // Per-depth radii, filled lazily (the frame is used by one descent only).
+  Level level_[kPathLevels];
+  // Filled lazily (the frame is used by one descent only).
+  mutable LaneTables t_;
   alignas(64) mutable Lanes radius_a_[kMaxDepth + 1], radius_b_[kMaxDepth + 1];
-  mutable uint32_t filled_a_ = 0, filled_b_ = 0;
+  mutable LevelTables level_tables_[kPathLevels];
+  alignas(64) mutable Lanes level_offsets_[kPathLevels][8];
+  mutable uint32_t filled_a_ = 0, filled_b_ = 0, filled_levels_ = 0, filled_offsets_ = 0;
 };
-
-// A box pair known to overlap, waiting on the descent stack. Its projections
-// live in the pool block of its parent's path level (see descend).
-struct Entry {
-  const double* p;
-  uint32_t ia, ib;  // level indices
-  Coord ca, cb;
-  uint8_t da, db;
-};
-
-// DFS stack bound: an expansion pushes <= 8 pairs and a path has at most
-// da + db <= 2 * kMaxDepth expansions, each leaving its pushes on the stack.
-constexpr size_t kStackSize = 8 * 2 * kMaxDepth + 1;
-constexpr int kPathLevels = 2 * kMaxDepth;
 
 // The occupied octants of every child mask, in order.
 struct OctantTable {
@@ -451,6 +625,17 @@ struct OctantTable {
   }
 };
 constexpr OctantTable kOctants;
+
+// Box coordinates packed in one word, 21 bits per axis: a child is its parent
+// shifted left by one, or'ed with its octant's bits.
+using Packed = uint64_t;
+constexpr Packed kOctantBits[8] = {0, 1, 1ull << 21, 1 + (1ull << 21), 1ull << 42, 1 + (1ull << 42),
+                                   (1ull << 21) + (1ull << 42), 1 + (1ull << 21) + (1ull << 42)};
+[[gnu::always_inline]] inline Packed child_of(Packed c, uint8_t octant) { return (c << 1) | kOctantBits[octant]; }
+[[gnu::always_inline]] inline Coord unpack(Packed c) {
+  constexpr Packed m = (1u << 21) - 1;
+  return {uint16_t(c & m), uint16_t((c >> 21) & m), uint16_t((c >> 42) & m)};
+}
 
 // Some occupied leaf (at `depth`) under box (d, index, c), lowest octants
 // first; false if the box has none.
@@ -469,107 +654,125 @@ bool some_leaf(const ObjectTree& tree, int depth, int d, uint32_t index, const C
 
 // Depth-first descent in canonical order, calling on_leaf(a's leaf, b's
 // leaf) for each overlapping leaf pair: only the first if kFirstOnly.
+//
+// Depth first, the box pairs waiting at path level L + 1 are all children of
+// the one pair open at level L, so the descent keeps one record per level: the
+// open pair (projections, indices, coordinates) and its overlapping children
+// still to visit, in visiting order. A child's projections are recomputed
+// from its parent's when it is visited (the same sums the kernel did).
 template <bool kFirstOnly, class K, class OnLeaf>
 [[gnu::always_inline]] inline void descend(const PairFrame<K>& frame, const PlacedTree& a, const PlacedTree& b,
                                            PairTest& result, OnLeaf on_leaf) {
-  // The children of a pair at path level L = da + db write their projections
-  // to pool[L]: depth first, every pair of level L + 1 waiting on the stack
-  // was made by the one expansion at level L still open, so nothing there is
-  // overwritten before it is used. No copies.
-  alignas(64) Lanes pool[kPathLevels][8];
-  alignas(64) Lanes root_p;
-  std::array<Entry, kStackSize> stack;
-  size_t n = 0;
-  frame.project({0, 0, 0}, 0, {0, 0, 0}, 0, root_p);
+  struct Open {
+    alignas(64) Lanes p;
+    Packed coord[2];     // A's, B's
+    uint32_t index[2];   // level indices, A's, B's
+    uint32_t first;      // first child of the split box
+    uint8_t next, count;  // children to visit: order[next..count)
+    uint8_t order[8];     // their octants, visiting order
+    uint8_t mask;         // the split box's child mask
+    uint8_t split;        // the split side: 0 A, 1 B
+    const Lanes* offset;  // the children's offsets, octant order (times scale)
+    double scale;
+  };
+  Open open[kPathLevels + 1];
+  frame.project({0, 0, 0}, 0, {0, 0, 0}, 0, open[0].p);
   ++result.box_tests;
-  if (!frame.overlap(root_p, 0, 0)) return;
-  // The child masks of every depth of both trees, looked up once.
-  const uint8_t* masks[2][kMaxDepth];
-  for (int d = 0; d < a.depth; ++d) masks[0][d] = a.tree->masks().masks[size_t(d)].data();
-  for (int d = 0; d < b.depth; ++d) masks[1][d] = b.tree->masks().masks[size_t(d)].data();
-  stack[n++] = Entry{root_p, 0, 0, {0, 0, 0}, {0, 0, 0}, 0, 0};
-  while (n > 0) {
-    // Field by field: a block copy would reload the pushed fields in wider
-    // loads than they were stored with (a store-forwarding stall).
-    const Entry& top = stack[--n];
-    const Entry e{top.p, top.ia, top.ib, top.ca, top.cb, top.da, top.db};
-    const bool split_a = frame.split_a(e.da, e.db);
-    if (!split_a && e.db == b.depth) {  // neither can split: a leaf pair
-      result.hit = true;
-      on_leaf(e.ca, e.cb);
-      if (kFirstOnly) return;
-      continue;
-    }
-    const ObjectTree& tree = split_a ? *a.tree : *b.tree;
-    const int d = split_a ? e.da : e.db;
-    const uint32_t index = split_a ? e.ia : e.ib;
+  if (!frame.overlap(open[0].p, 0, 0)) return;
+  const int levels = frame.levels();
+  if (levels == 0) {  // neither can split: the roots are the leaf pair
+    result.hit = true;
+    on_leaf(Coord{0, 0, 0}, Coord{0, 0, 0});
+    return;
+  }
+  open[0].coord[0] = open[0].coord[1] = 0;
+  open[0].index[0] = open[0].index[1] = 0;
+  Open* top = open;  // the pair open at the deepest level
+  for (;;) {
+    // Expand the pair open at level l.
+    Open& o = *top;
+    const int l = int(top - open);
+    const Level& lv = frame.level(l);
+    const int side = lv.split_a ? 0 : 1;
+    const uint32_t index = o.index[side];
     // The other box is a leaf and holds this one whole: any leaf below is a
     // proof (counted as the one box test it replaces).
-    if (kFirstOnly && (split_a ? e.db == b.depth && frame.a_inside_b(e.p, e.da, e.db)
-                               : e.da == a.depth && frame.b_inside_a(e.p, e.da, e.db))) {
+    if (kFirstOnly && lv.other_leaf && frame.split_box_inside(o.p, lv)) {
       Coord leaf;
-      if (some_leaf(tree, split_a ? a.depth : b.depth, d, index, split_a ? e.ca : e.cb, leaf)) {
+      const ObjectTree& tree = lv.split_a ? *a.tree : *b.tree;
+      if (some_leaf(tree, lv.split_a ? a.depth : b.depth, lv.d, index, unpack(o.coord[side]), leaf)) {
         ++result.box_tests;
         result.hit = true;
-        split_a ? on_leaf(leaf, e.cb) : on_leaf(e.ca, leaf);
+        const Coord other = unpack(o.coord[1 - side]);
+        lv.split_a ? on_leaf(leaf, other) : on_leaf(other, leaf);
         return;
       }
     }
-    const uint8_t mask = masks[split_a ? 0 : 1][d][index];
-    const uint32_t first = tree.first_child(d, index);
+    const LevelTables& t = frame.template tables<!kFirstOnly>(l);
+    const uint8_t mask = lv.masks[index];
     const int count = kOctants.count[mask];
-    const uint8_t* octant = kOctants.octant[mask];
-    Lanes* out = pool[e.da + e.db];
-    const uint32_t hits = frame.children_overlap(split_a, d, split_a ? e.db : e.da, e.p, octant, count, out);
+    const uint32_t hits = PairFrame<K>::template children_overlap<!kFirstOnly>(t, o.p, kOctants.octant[mask], count);
     result.box_tests += uint64_t(count);
-    if (hits == 0) continue;
-    const Coord& grown = split_a ? e.ca : e.cb;
-    const auto child = [&](int c) {
-      const uint8_t j = octant[c];
-      return Coord{uint16_t(2 * grown[0] + (j & 1u)), uint16_t(2 * grown[1] + ((j >> 1) & 1u)),
-                   uint16_t(2 * grown[2] + ((j >> 2) & 1u))};
-    };
-    const auto distance = [&](int c) { return (out[c][0] * out[c][0] + out[c][1] * out[c][1]) + out[c][2] * out[c][2]; };
-    // Children that are leaf pairs (neither side splits further) are reported
-    // here, in the order the stack would pop them: no push, pop or sort for
-    // the first only (just the nearest).
-    const bool leaves = split_a ? e.da + 1 == a.depth && e.db == b.depth : e.db + 1 == b.depth && e.da == a.depth;
-    if (kFirstOnly && leaves) {
-      int best = std::countr_zero(hits);
-      double best_key = distance(best);
-      for (uint32_t rest = hits & (hits - 1); rest != 0; rest &= rest - 1) {
-        const int c = std::countr_zero(rest);
-        const double k = distance(c);
-        if (k < best_key) best = c, best_key = k;  // ties: the lower octant
+    o.next = o.count = 0;
+    if (hits != 0) {
+      // Squared centre distances of the children by octant (lanes 0..2: the
+      // offset in A's axes), the same sums as the kernel's (by octant).
+      alignas(32) double key[8];
+      if (kFirstOnly)
+        for (int h = 0; h < 8; h += 4) {
+          v4d x, y, z;
+          load4(x, t.centre[0] + h);
+          load4(y, t.centre[1] + h);
+          load4(z, t.centre[2] + h);
+          x = o.p[0] + x * t.scale, y = o.p[1] + y * t.scale, z = o.p[2] + z * t.scale;
+          store4(key + h, (x * x + y * y) + z * z);
+        }
+      const auto report = [&](int j) {
+        const Packed grown = child_of(o.coord[side], uint8_t(j));
+        lv.split_a ? on_leaf(unpack(grown), unpack(o.coord[1])) : on_leaf(unpack(o.coord[0]), unpack(grown));
+      };
+      if (l + 1 == levels) {
+        // The children are leaf pairs: reported here (the first only: just
+        // the nearest, ties in octant order).
+        result.hit = true;
+        if (kFirstOnly) {
+          int best = std::countr_zero(hits);
+          for (uint32_t rest = hits & (hits - 1); rest != 0; rest &= rest - 1) {
+            const int j = std::countr_zero(rest);
+            if (key[j] < key[best]) best = j;
+          }
+          report(best);
+          return;
+        }
+        for (uint32_t rest = hits; rest != 0; rest &= rest - 1) report(std::countr_zero(rest));
+      } else {
+        int m = 0;
+        if (kFirstOnly) {
+          m = K::nearest_order(key, hits, o.order);
+        } else {
+          // Every overlapping pair is visited: the order cannot matter.
+          for (uint32_t rest = hits; rest != 0; rest &= rest - 1) o.order[m++] = uint8_t(std::countr_zero(rest));
+        }
+        o.count = uint8_t(m);
+        o.first = (lv.split_a ? *a.tree : *b.tree).first_child(lv.d, index);
+        o.mask = mask;
+        o.split = uint8_t(side);
+        o.offset = t.offset;
+        o.scale = t.scale;
       }
-      result.hit = true;
-      split_a ? on_leaf(child(best), e.cb) : on_leaf(e.ca, child(best));
-      return;
     }
-    // Nearest first: sort the overlapping children by centre distance
-    // (lanes 0..2 are the offset in A's axes), ties in octant order.
-    int order[8];
-    double key[8];
-    int m = 0;
-    for (uint32_t rest = hits; rest != 0; rest &= rest - 1) {
-      const int c = std::countr_zero(rest);
-      const double k = distance(c);
-      int at = m++;
-      for (; at > 0 && key[at - 1] > k; --at) order[at] = order[at - 1], key[at] = key[at - 1];
-      order[at] = c, key[at] = k;
-    }
-    if (leaves) {
-      result.hit = true;
-      for (int s = 0; s < m; ++s) split_a ? on_leaf(child(order[s]), e.cb) : on_leaf(e.ca, child(order[s]));
-      continue;
-    }
-    assert(n + size_t(m) <= kStackSize);
-    // Pushed farthest first so that the nearest is popped next.
-    for (int s = m - 1; s >= 0; --s) {
-      const int c = order[s];
-      stack[n++] = split_a ? Entry{out[c], first + uint32_t(c), e.ib, child(c), e.cb, uint8_t(e.da + 1), e.db}
-                           : Entry{out[c], e.ia, first + uint32_t(c), e.ca, child(c), e.da, uint8_t(e.db + 1)};
-    }
+    // Back to the deepest level with a child left to visit.
+    while (top->next == top->count)
+      if (top-- == open) return;
+    Open& parent = *top;
+    Open& child = *++top;
+    const uint8_t j = parent.order[parent.next++];
+    const int split = parent.split;
+    add_lanes<kFirstOnly>(child.p, parent.p, parent.offset[j], parent.scale);
+    child.index[0] = parent.index[0], child.index[1] = parent.index[1];
+    child.coord[0] = parent.coord[0], child.coord[1] = parent.coord[1];
+    child.index[split] = parent.first + uint32_t(std::popcount(unsigned(parent.mask & ((1u << j) - 1))));
+    child.coord[split] = child_of(parent.coord[split], j);
   }
 }
 

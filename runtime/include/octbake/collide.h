@@ -6,14 +6,16 @@
 // axis test of two oriented boxes; the descent starts at the two roots and,
 // at every overlapping box pair that is not yet a leaf pair, splits ONE box:
 // the larger one (half diagonal in A's units; a tree already at its depth
-// cannot split). All occupied children of the split box are tested against
-// the other box in one go, and the overlapping ones are visited nearest first
-// (distance between box centres), depth first, with full backtracking. The
-// first overlapping leaf pair ends the descent (early out): that pair proves
-// the hit and is reported (children that are leaf pairs are reported where
-// they are tested, in the same nearest-first order, without being pushed).
-// So a small object against a large one walks down
-// the large tree first, and the pairs most likely to touch are tried first.
+// cannot split). Which box splits depends only on the two depths, so the
+// split schedule is worked out once per pair. All occupied children of the
+// split box are tested against the other box in one go, and the overlapping
+// ones are visited nearest first (distance between box centres; collide_all,
+// which visits every one, takes them in octant order), depth first, with full
+// backtracking. The first overlapping leaf pair ends the descent (early out):
+// that pair proves the hit and is reported (children that are leaf pairs are
+// reported where they are tested, the nearest one, without being visited).
+// So a small object against a large one walks down the large tree first, and
+// the pairs most likely to touch are tried first.
 // One more early out: when the other box is already a leaf and holds the box
 // about to split whole (with a margin of one pad), any occupied leaf below
 // overlaps it, so the first one found (lowest octants first) proves the hit.
@@ -26,10 +28,14 @@
 // each of the 15 axes is its parent's plus a signed sum of three terms,
 // precomputed per depth for the pair. A box pair carries its 15 projections
 // (16 lanes, one idle); testing a child is 16 additions, absolute values and
-// comparisons against precomputed radii (double precision; AVX-512 or AVX2
-// where the CPU has them, plain C++ otherwise; all give identical bits). The
-// whole pair test is compiled once per ISA with its kernel inlined and the
-// build is chosen once per pair.
+// comparisons against precomputed radii (collide_all's offsets are scaled to
+// each depth beforehand, collide's by a power of two in the test: exact
+// either way; double precision; AVX-512 or AVX2 where the CPU has them, plain
+// C++ otherwise; all give identical bits). Nothing is stored for a child
+// that is tested: the descent keeps one record per path level (the pair open
+// there and its overlapping children still to visit) and recomputes a
+// child's projections when it visits it. The whole pair test is compiled
+// once per ISA with its kernel inlined and the build is chosen once per pair.
 //
 // Why it is conservative. If the meshes touch at a point x, x lies in an
 // occupied leaf box of each tree (the occupancy is conservative) and so in
@@ -52,7 +58,7 @@
 // so hit, box_tests and leaf (mapped back to the caller's order) do not depend
 // on argument order. Deterministic: the same inputs give the same counts.
 // Preconditions (asserted): depth in 0..min(tree->loaded_depth(), 12), finite
-// pose, scale > 0, unit rotation. No heap allocation (about 40 KB of stack).
+// pose, scale > 0, unit rotation. No heap allocation (about 45 KB of stack).
 #pragma once
 #include <cstdint>
 #include <vector>
