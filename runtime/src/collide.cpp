@@ -369,7 +369,7 @@ template <class K>
 class PairFrame {
  public:
   [[gnu::always_inline]] PairFrame(const PlacedTree& a, const PlacedTree& b)
-      : rel_(a, b), depth_a_(a.depth), depth_b_(b.depth) {
+      : rel_(a, b) {
     const Eigen::Matrix3d& r = rel_.r;
     const Eigen::Matrix3d& ar = rel_.abs_r;
     // The weights in 4-lane chunks, built in registers (scalar stores read
@@ -548,12 +548,17 @@ class PairFrame {
     return centre;
   }
 
+  // W in 4-lane chunks: w[m][c] = lanes 4c..4c+3 of t_.w[m].
+  void load_weights(v4d (&w)[3][4]) const {
+    for (int m = 0; m < 3; ++m)
+      for (int c = 0; c < 4; ++c) load4(w[m][c], t_.w[m] + 4 * c);
+  }
+
   // The depth-1 child offsets of A's (B's) root, filled on first use.
   const Lanes* offsets_a() const {
     if (!(filled_offsets_ & 1u)) {
       v4d w[3][4];
-      for (int m = 0; m < 3; ++m)
-        for (int c = 0; c < 4; ++c) load4(w[m][c], t_.w[m] + 4 * c);
+      load_weights(w);
       const double quarter[3] = {0.25 * a_size_[0], 0.25 * a_size_[1], 0.25 * a_size_[2]};
       // t = centre B - centre A: A's child moving by +q moves t by -q.
       fill_offsets(t_.offset_a, w, quarter, -1.0);
@@ -564,8 +569,7 @@ class PairFrame {
   const Lanes* offsets_b() const {
     if (!(filled_offsets_ & 2u)) {
       v4d w[3][4];
-      for (int m = 0; m < 3; ++m)
-        for (int c = 0; c < 4; ++c) load4(w[m][c], t_.w[m] + 4 * c);
+      load_weights(w);
       // B's local axis j moves its centre by sR e_j in A's frame.
       const Eigen::Matrix3d& sr = rel_.sr;
       v4d wb[3][4];
@@ -603,7 +607,7 @@ class PairFrame {
   }
 
   Relative rel_;
-  int depth_a_, depth_b_, levels_;
+  int levels_;
   Eigen::Vector3d a_min_, b_min_, a_size_, b_size_;  // root sizes
   Level level_[kPathLevels];
   // Filled lazily (the frame is used by one descent only).

@@ -54,12 +54,6 @@ void for_each_cell(const std::array<uint16_t, 3>& lo, const std::array<uint16_t,
       for (c[0] = lo[0]; c[0] <= hi[0]; ++c[0]) f(c);
 }
 
-uint64_t cell_count(const std::array<uint16_t, 3>& lo, const std::array<uint16_t, 3>& hi) {
-  uint64_t n = 1;
-  for (int k = 0; k < 3; ++k) n *= uint64_t(hi[k]) - lo[k] + 1;
-  return n;
-}
-
 // Index of cell c in for_each_cell(lo, hi)'s order.
 size_t index_in(const std::array<uint16_t, 3>& c, const std::array<uint16_t, 3>& lo, const std::array<uint16_t, 3>& hi) {
   const size_t nx = size_t(hi[0]) - lo[0] + 1, ny = size_t(hi[1]) - lo[1] + 1;
@@ -285,15 +279,14 @@ void WorldTree::apply_moves(std::span<const uint32_t> ids, size_t part, size_t p
 void WorldTree::finish_move(uint32_t id, const CellRange& r, const Move& m) {
   Entry& e = entries_[id];
   std::array<uint32_t, kFastCells> old;
-  const size_t n = e.cells.size();
+  assert(e.cells.size() <= kFastCells);
   std::copy(e.cells.begin(), e.cells.end(), old.begin());
   e.cells.clear();  // capacity kEntryReserve >= kFastCells: no allocation
   size_t j = 0;
   for_each_cell(r.lo, r.hi, [&](const Coord& c) {
     e.cells.push_back(inside(c, e.lo, e.hi) ? old[index_in(c, e.lo, e.hi)] : m.enter[j++]);
   });
-  assert(j == m.enters && n <= kFastCells);
-  (void)n;
+  assert(j == m.enters);
   e.lo = r.lo;
   e.hi = r.hi;
   lo_[id] = r.lo;

@@ -198,6 +198,12 @@ class OCTBAKE_API WorldTree {
   };
 
   Coord cell_of(const Eigen::Vector3d& p) const;
+  // Cells in the inclusive range [lo, hi].
+  static uint64_t cell_count(const Coord& lo, const Coord& hi) {
+    uint64_t n = 1;
+    for (int k = 0; k < 3; ++k) n *= uint64_t(hi[k]) - lo[k] + 1;
+    return n;
+  }
   // emit(a, b) for the cell pairs of the busy cells of bitmap words
   // [begin, end) that keep(a, b) accepts.
   template <class Keep, class Emit>
@@ -271,9 +277,7 @@ inline WorldTree::Coord WorldTree::cell_of(const Eigen::Vector3d& p) const {
 inline WorldTree::CellRange WorldTree::cell_range(const Aabb& box) const {
   assert(!box.min.hasNaN() && !box.max.hasNaN());
   CellRange r{cell_of(box.min), cell_of(box.max), false};
-  uint64_t count = 1;
-  for (int k = 0; k < 3; ++k) count *= uint64_t(r.hi[k]) - r.lo[k] + 1;
-  r.overflow = count > kMaxCells;
+  r.overflow = cell_count(r.lo, r.hi) > kMaxCells;
   return r;
 }
 
