@@ -360,13 +360,19 @@ int CollisionWorld::max_depth_of(const Slot& s) const {
   return std::min(s.source.tree->loaded_depth(), kMaxDepth);
 }
 
+void CollisionWorld::set_offset(Slot& s) {
+  Pose at_origin = s.pose;
+  at_origin.position.setZero();
+  s.offset = world_bounds(place(tree_of(s).bounds(), at_origin));
+  s.offset_reach = std::max(max_abs(s.offset.min), max_abs(s.offset.max));
+}
+
 void CollisionWorld::place_box(uint32_t i) {
   const Slot& s = slots_[i];
   const Eigen::Vector3d& p = s.pose.position;
-  const Aabb& off = s.offset;
-  const double pad = kRelativePad * (max_abs(p) + std::max(max_abs(off.min), max_abs(off.max)));
-  boxes_[i].min = (p + off.min).array() - pad;
-  boxes_[i].max = (p + off.max).array() + pad;
+  const double pad = kRelativePad * (max_abs(p) + s.offset_reach);
+  boxes_[i].min = (p + s.offset.min).array() - pad;
+  boxes_[i].max = (p + s.offset.max).array() + pad;
 }
 
 Result<ObjectHandle> CollisionWorld::create(TreeSource source, const Pose& pose) {
@@ -398,9 +404,7 @@ Result<ObjectHandle> CollisionWorld::create(TreeSource source, const Pose& pose)
   s.source = source;
   s.live = true;
   s.pose = pose;
-  Pose at_origin = pose;
-  at_origin.position.setZero();
-  s.offset = world_bounds(place(tree_of(s).bounds(), at_origin));
+  set_offset(s);
   place_box(i);
   s.tree_dirty = s.listed = true;
   if (!listed) dirty_.push_back(i);
@@ -436,13 +440,8 @@ bool same_pose(const Pose& a, const Pose& b) { return same_frame_of(a, b) && sam
 // Inlined: set_pose runs it for every moved object.
 [[gnu::always_inline]] inline bool CollisionWorld::move_to(uint32_t i, const Pose& pose, bool same_frame) {
   Slot& s = slots_[i];
-  // Cheap when only the position changed: the offset box stays.
-  if (!same_frame) {
-    Pose at_origin = pose;
-    at_origin.position.setZero();
-    s.offset = world_bounds(place(tree_of(s).bounds(), at_origin));
-  }
   s.pose = pose;
+  if (!same_frame) set_offset(s);  // only the position changed: the offset box stays
   place_box(i);
   if (settings_.area_refresh == AreaRefresh::on_demand) s.area_epoch = 0;
   if (s.tree_dirty) return false;

@@ -341,6 +341,7 @@ class OCTBAKE_API CollisionWorld {
     int depth = 0;
     Pose pose;
     Aabb offset;  // world AABB of the tree at (rotation, scale), relative to the position
+    double offset_reach = 0;  // largest |coordinate| of offset: place_box's padding, kept with it
     uint64_t area_epoch = 0;  // == epoch_: area/depth match the current pose, camera and LOD
     double area = 0;
     TreeSource source;
@@ -355,6 +356,7 @@ class OCTBAKE_API CollisionWorld {
   const ObjectTree& tree_of(const Slot& s) const;
   int max_depth_of(const Slot& s) const;
   void place_box(uint32_t slot);  // boxes_[slot] from the slot's pose and offset
+  void set_offset(Slot& s);       // s.offset and s.offset_reach from its tree, rotation and scale
   // Sets live slot i to a checked pose that differs from its own; true when
   // the slot just became dirty (the caller lists it in dirty_).
   bool move_to(uint32_t i, const Pose& pose, bool same_frame);  // same_frame: rotation and scale unchanged
