@@ -38,7 +38,9 @@ bool same_bits(const Aabb& a, const Aabb& b) {
 TEST(WorldBounds, OneUlpOutwardsLikeNextafter) {
   std::mt19937 rng(11);
   const double specials[] = {0.0, -0.0, std::numeric_limits<double>::denorm_min(), -std::numeric_limits<double>::min(),
-                             1e-300, -1e300, 1e7, -1e7, std::numeric_limits<double>::max()};
+                             1e-300, -1e300, 1e7, -1e7, std::numeric_limits<double>::max(),
+                             -std::numeric_limits<double>::denorm_min(), std::numeric_limits<double>::infinity(),
+                             -std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::max()};
   int cases = 0;
   for (int run = 0; run < 20000; ++run) {
     OrientedBox box;
