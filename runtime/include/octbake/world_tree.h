@@ -33,6 +33,10 @@
 #include "octbake/octree.h"
 #include "octbake/export.h"
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace octbake {
 
 class OCTBAKE_API WorldTree {
@@ -236,6 +240,8 @@ class OCTBAKE_API WorldTree {
   int depth_;
   uint32_t side_;  // cells per axis
   Eigen::Vector3d inv_cell_;
+  // cell_range's constants for the six bounds (min x y z, max x y z).
+  alignas(16) std::array<double, 6> origin6_{}, inv6_{};
   uint64_t reinsertions_ = 0;
   std::vector<Entry> entries_;  // by id
   std::vector<Coord> lo_;       // hot copy of entries_[id].lo for the pair loop
@@ -276,7 +282,30 @@ inline WorldTree::Coord WorldTree::cell_of(const Eigen::Vector3d& p) const {
 
 inline WorldTree::CellRange WorldTree::cell_range(const Aabb& box) const {
   assert(!box.min.hasNaN() && !box.max.hasNaN());
-  CellRange r{cell_of(box.min), cell_of(box.max), false};
+  CellRange r;
+#if defined(__SSE2__)
+  // cell_of on the six bounds, two at a time (commit_poses runs this per
+  // moved object: the scalar clamps were most of its cost). The same
+  // subtraction and product, so the same t; clamping t to [0, side - 1]
+  // before truncating gives cell_of's cells (t >= side and t in
+  // [side - 1, side) both give side - 1).
+  const double bound[6] = {box.min[0], box.min[1], box.min[2], box.max[0], box.max[1], box.max[2]};
+  const __m128d last = _mm_set1_pd(double(side_ - 1));
+  alignas(16) std::array<int32_t, 8> cell;
+  for (int k = 0; k < 6; k += 2) {
+    __m128d t = _mm_mul_pd(_mm_sub_pd(_mm_loadu_pd(bound + k), _mm_load_pd(origin6_.data() + k)),
+                           _mm_load_pd(inv6_.data() + k));
+    t = _mm_min_pd(_mm_max_pd(t, _mm_setzero_pd()), last);
+    _mm_storel_epi64(reinterpret_cast<__m128i*>(cell.data() + k), _mm_cvttpd_epi32(t));
+  }
+  for (int k = 0; k < 3; ++k) {
+    r.lo[k] = uint16_t(cell[k]);
+    r.hi[k] = uint16_t(cell[3 + k]);
+  }
+#else
+  r.lo = cell_of(box.min);
+  r.hi = cell_of(box.max);
+#endif
   r.overflow = cell_count(r.lo, r.hi) > kMaxCells;
   return r;
 }
