@@ -256,11 +256,10 @@ struct LaneTables {
   // Offsets of the 8 children at depth 1, octant order, per tree (filled when
   // the tree first splits): at depth d they are these times 2^(1-d), exactly.
   alignas(64) Lanes offset_a[8], offset_b[8];
-  // Their lanes 0..2 by octant (centre_a[k][j] = offset_a[j][k]): collide only.
+  // Their lanes 0..2 by octant (centre_a[k][j] = offset_a[j][k]): collide only,
+  // filled when first needed to rank children.
   alignas(32) double centre_a[3][8], centre_b[3][8];
-  // Radius of a padded box on every axis at depth d: base * 2^-d + padding
-  // (filled per depth when the descent first reaches it: most pair tests end
-  // after a few depths).
+  // Radius of a padded box on every axis at depth d: base * 2^-d + padding.
   alignas(64) Lanes base_a, base_b, padding_a, padding_b;
 };
 
@@ -341,30 +340,27 @@ constexpr int kPathLevels = 2 * kMaxDepth;
 
 // One step of the descent. Which box splits depends only on the two depths
 // (da, db), and every step adds one to da + db, so all box pairs at path
-// level L = da + db have the same depths and split the same side: the split
-// schedule is one entry per level, worked out once per pair.
-struct Level {
-  bool split_a;     // A's box splits (else B's)
-  bool other_leaf;  // the other box is a leaf (containment early out)
-  uint8_t d;        // depth of the split box (its children: d + 1)
-  uint8_t other;    // depth of the other box
-  const uint8_t* masks;  // child masks of the split tree at depth d
-};
-
-// Tables of one level, filled when the descent first expands a pair there.
+// level L = da + db have the same depths and split the same side. A level is
+// worked out when the descent first expands a pair there (levels are reached
+// in order; most pair tests end after a few): its split and its tables.
 // collide_all (kScaled) scales the offsets once per level, and collide,
 // which mostly expands few pairs per level, in the kernel.
-struct LevelTables {
-  alignas(64) Lanes radius;   // radii of a child and of the other box, summed
-  const Lanes* offset;        // the children's offsets, octant order (times scale)
-  double scale;               // 1 if kScaled, else 2^-d
-  const double (*centre)[8];  // lanes 0..2 of the depth-1 offsets: centre[k][octant]
+struct Level {
+  alignas(64) Lanes radius;  // radii of a child and of the other box, summed
+  const Lanes* offset;       // the children's offsets, octant order (times scale)
+  double scale;              // 1 if kScaled, else 2^-d
+  const uint8_t* masks;      // child masks of the split tree at depth d
+  uint8_t da, db;            // depths of the box pairs at this level
+  bool split_a;              // A's box splits (else B's)
+  bool other_leaf;           // the other box is a leaf (containment early out)
+  uint8_t d;                 // depth of the split box (its children: d + 1)
+  uint8_t other;             // depth of the other box
 };
 
 // ---- The pair frame --------------------------------------------------------
-// Per pair: the projection matrix W (p = W t), the split schedule, and
-// lazily: per tree the depth-1 child offsets, per depth and tree the 16-lane
-// radii, per level the summed radii and scaled offsets.
+// Per pair: the projection matrix W (p = W t), the radii's terms, and lazily:
+// per tree the depth-1 child offsets, per level its split, summed radii and
+// (scaled) offsets.
 template <class K>
 class PairFrame {
  public:
@@ -414,25 +410,28 @@ class PairFrame {
     }
     fill_radii(t_.base_a, t_.padding_a, aw, half_a, rel_.pad);
     fill_radii(t_.base_b, t_.padding_b, bw, half_b, rel_.pad);
-    // The split schedule: the larger box splits (half diagonals in A's units,
-    // both halving with each depth; a tree already at its depth cannot).
-    const double size_a = (0.5 * a_size_).squaredNorm(), size_b = (0.5 * rel_.s * b_size_).squaredNorm();
-    levels_ = a.depth + b.depth;
-    int da = 0, db = 0;
-    for (int l = 0; l < levels_; ++l) {
-      const bool sa = da < a.depth && (db == b.depth || size_a * kHalfPow[2 * da] >= size_b * kHalfPow[2 * db]);
-      Level& lv = level_[l];
-      lv.split_a = sa;
-      lv.d = uint8_t(sa ? da : db);
-      lv.other = uint8_t(sa ? db : da);
-      lv.other_leaf = sa ? db == b.depth : da == a.depth;
-      lv.masks = (sa ? a.tree : b.tree)->masks().masks[size_t(lv.d)].data();
-      (sa ? da : db) += 1;
-    }
+    // For the split schedule (fill_level): half diagonals in A's units.
+    size_a_ = (0.5 * a_size_).squaredNorm();
+    size_b_ = (0.5 * rel_.s * b_size_).squaredNorm();
+    tree_a_ = a.tree;
+    tree_b_ = b.tree;
+    depth_a_ = a.depth;
+    depth_b_ = b.depth;
   }
 
-  int levels() const { return levels_; }
-  const Level& level(int l) const { return level_[l]; }
+  int levels() const { return depth_a_ + depth_b_; }
+
+  // Level l, worked out on first use: the descent expands a pair at level l
+  // only after one at l - 1 (one descent uses the frame, so always the same
+  // kScaled).
+  template <bool kScaled>
+  [[gnu::always_inline]] const Level& level(int l) const {
+    assert(l <= known_levels_);
+    if (l == known_levels_) fill_level<kScaled>(l);
+    return level_[l];
+  }
+  // A level already worked out.
+  const Level& known_level(int l) const { return level_[l]; }
 
   // Projections of box pair (A's ca at da, B's cb at db).
   void project(const Coord& ca, int da, const Coord& cb, int db, Lanes& p) const {
@@ -450,15 +449,12 @@ class PairFrame {
   }
 
   bool overlap(const double* p, int da, int db) const {
-    const double *ra = radius_a(da), *rb = radius_b(db);
     using v4l = int64_t __attribute__((vector_size(32)));
     v4l separated{};
     for (int k = 0; k < kLanes; k += 4) {
-      v4d pk, rak, rbk;
+      v4d pk, r;
       load4(pk, p + k);
-      load4(rak, ra + k);
-      load4(rbk, rb + k);
-      const v4d r = rak + rbk;
+      radius4(r, k, kHalfPow[da], kHalfPow[db]);
       separated |= (pk > r) | (-pk > r);  // |p| > r (negation is exact)
     }
     return !(separated[0] | separated[1] | separated[2] | separated[3]);
@@ -470,45 +466,56 @@ class PairFrame {
   // for B), where the inner box's radius bounds its extent (|R| padded).
   // Here: does the box about to split at level l lie inside the other one?
   bool split_box_inside(const double* p, const Level& lv) const {
-    return lv.split_a ? inside(p, radius_a(lv.d), radius_b(lv.other), 3)
-                      : inside(p, radius_b(lv.d), radius_a(lv.other), 0);
-  }
-
-  // The tables of level l (filled on first use; one descent uses the frame,
-  // so always the same kScaled).
-  template <bool kScaled>
-  [[gnu::always_inline]] const LevelTables& tables(int l) const {
-    if (!(filled_levels_ & (1u << l))) [[unlikely]]
-      fill_level<kScaled>(l);
-    return level_tables_[l];
+    const double hi = kHalfPow[lv.d], ho = kHalfPow[lv.other];
+    return lv.split_a ? inside(p, t_.base_a, t_.padding_a, hi, t_.base_b, t_.padding_b, ho, 3)
+                      : inside(p, t_.base_b, t_.padding_b, hi, t_.base_a, t_.padding_a, ho, 0);
   }
 
   // Test the children of the split box of level l against the other box: see
   // children_overlap.
   template <bool kScaled>
-  [[gnu::always_inline]] static uint32_t children_overlap(const LevelTables& t, const double* parent,
+  [[gnu::always_inline]] static uint32_t children_overlap(const Level& t, const double* parent,
                                                           const uint8_t* octant, int n) {
     return K::template children_overlap<!kScaled>(parent, t.radius, t.offset, t.scale, octant, n);
+  }
+
+  // Lanes 0..2 of the depth-1 offsets of the tree split at lv, by octant:
+  // centre[k][octant] (for the nearest-first keys).
+  const double (*centres(const Level& lv) const)[8] {
+    return lv.split_a ? centres(t_.centre_a, t_.offset_a, 4u) : centres(t_.centre_b, t_.offset_b, 8u);
   }
 
  private:
   template <bool kScaled>
   void fill_level(int l) const {
-    const Level& lv = level_[l];
-    const double *ra = radius_a(lv.split_a ? lv.d + 1 : lv.other), *rb = radius_b(lv.split_a ? lv.other : lv.d + 1);
-    LevelTables& t = level_tables_[l];
-    for (int k = 0; k < kLanes; k += 4) {
-      v4d x, y;
-      load4(x, ra + k);
-      load4(y, rb + k);
-      store4(t.radius + k, x + y);
+    Level& lv = level_[l];
+    int da = 0, db = 0;
+    if (l > 0) {
+      const Level& up = level_[l - 1];
+      da = up.da + up.split_a;
+      db = up.db + !up.split_a;
     }
-    const Lanes* depth1 = lv.split_a ? offsets_a() : offsets_b();
-    t.offset = depth1;
-    t.scale = kHalfPow[lv.d];
-    if (!kScaled) {
-      t.centre = lv.split_a ? centres(t_.centre_a, depth1, 4u) : centres(t_.centre_b, depth1, 8u);
-    } else if (lv.d > 0) {
+    // The larger box splits (half diagonals, both halving with each depth; a
+    // tree already at its depth cannot).
+    const bool sa = da < depth_a_ && (db == depth_b_ || size_a_ * kHalfPow[2 * da] >= size_b_ * kHalfPow[2 * db]);
+    lv.da = uint8_t(da);
+    lv.db = uint8_t(db);
+    lv.split_a = sa;
+    lv.d = uint8_t(sa ? da : db);
+    lv.other = uint8_t(sa ? db : da);
+    lv.other_leaf = sa ? db == depth_b_ : da == depth_a_;
+    lv.masks = (sa ? tree_a_ : tree_b_)->masks().masks[size_t(lv.d)].data();
+    // Radii of the box pairs below: the split side one depth deeper.
+    const double ha = kHalfPow[da + sa], hb = kHalfPow[db + !sa];
+    for (int k = 0; k < kLanes; k += 4) {
+      v4d r;
+      radius4(r, k, ha, hb);
+      store4(lv.radius + k, r);
+    }
+    const Lanes* depth1 = sa ? offsets_a() : offsets_b();
+    lv.offset = depth1;
+    lv.scale = kHalfPow[lv.d];
+    if (kScaled && lv.d > 0) {
       // Scaled by a power of two: exact, the same bits as scaling in the kernel.
       const double h = kHalfPow[lv.d];
       Lanes* scaled = level_offsets_[l];
@@ -518,12 +525,12 @@ class PairFrame {
           load4(x, depth1[j] + k);
           store4(scaled[j] + k, x * h);
         }
-      t.offset = scaled;
-      t.scale = 1;
-    } else {
-      t.scale = 1;
+      lv.offset = scaled;
+      lv.scale = 1;
+    } else if (kScaled) {
+      lv.scale = 1;
     }
-    filled_levels_ |= 1u << l;
+    ++known_levels_;
   }
 
   // centre[k][j] = offset[j][k], k < 3 (two 4x4 transpositions), filled once
@@ -582,40 +589,38 @@ class PairFrame {
     return t_.offset_b;
   }
 
-  // The 16-lane radii of A's (B's) boxes at depth d, filled on first use.
-  const double* radius_a(int d) const { return radius(d, t_.base_a, t_.padding_a, radius_a_, filled_a_); }
-  const double* radius_b(int d) const { return radius(d, t_.base_b, t_.padding_b, radius_b_, filled_b_); }
-  [[gnu::always_inline]] static const double* radius(int d, const double* base, const double* padding, Lanes* table,
-                                                     uint32_t& filled) {
-    if (!(filled & (1u << d))) [[unlikely]] {
-      const double h = kHalfPow[d];
-      for (int k = 0; k < kLanes; k += 4) {
-        v4d bk, pk;
-        load4(bk, base + k);
-        load4(pk, padding + k);
-        store4(table[d] + k, bk * h + pk);
-      }
-      filled |= 1u << d;
-    }
-    return table[d];
+  // Lanes k..k+3 of the summed radii of A's box at scale ha = 2^-da and B's
+  // at hb: each radius is base * 2^-d + padding (computed where needed: a
+  // table per depth cost more than it saved).
+  [[gnu::always_inline]] void radius4(v4d& r, int k, double ha, double hb) const {
+    v4d ba, pa, bb, pb;
+    load4(ba, t_.base_a + k);
+    load4(pa, t_.padding_a + k);
+    load4(bb, t_.base_b + k);
+    load4(pb, t_.padding_b + k);
+    r = (ba * ha + pa) + (bb * hb + pb);
   }
 
-  bool inside(const double* p, const double* inner, const double* outer, int lane) const {
+  bool inside(const double* p, const double* inner_base, const double* inner_padding, double hi,
+              const double* outer_base, const double* outer_padding, double ho, int lane) const {
     bool in = true;
-    for (int k = lane; k < lane + 3; ++k) in &= (std::abs(p[k]) + inner[k]) + rel_.pad <= outer[k];
+    for (int k = lane; k < lane + 3; ++k)
+      in &= (std::abs(p[k]) + (inner_base[k] * hi + inner_padding[k])) + rel_.pad <=
+            outer_base[k] * ho + outer_padding[k];
     return in;
   }
 
   Relative rel_;
-  int levels_;
   Eigen::Vector3d a_min_, b_min_, a_size_, b_size_;  // root sizes
-  Level level_[kPathLevels];
+  double size_a_, size_b_;  // squared half diagonals in A's units
+  const ObjectTree *tree_a_, *tree_b_;
+  int depth_a_, depth_b_;
   // Filled lazily (the frame is used by one descent only).
   mutable LaneTables t_;
-  alignas(64) mutable Lanes radius_a_[kMaxDepth + 1], radius_b_[kMaxDepth + 1];
-  mutable LevelTables level_tables_[kPathLevels];
+  mutable Level level_[kPathLevels];
   alignas(64) mutable Lanes level_offsets_[kPathLevels][8];
-  mutable uint32_t filled_a_ = 0, filled_b_ = 0, filled_levels_ = 0, filled_offsets_ = 0;
+  mutable int known_levels_ = 0;  // levels 0..known_levels_ - 1 are worked out
+  mutable uint32_t filled_offsets_ = 0;
 };
 
 // The occupied octants of every child mask, in order.
@@ -675,9 +680,6 @@ template <bool kFirstOnly, class K, class OnLeaf>
     uint8_t next, count;  // children to visit: order[next..count)
     uint8_t order[8];     // their octants, visiting order
     uint8_t mask;         // the split box's child mask
-    uint8_t split;        // the split side: 0 A, 1 B
-    const Lanes* offset;  // the children's offsets, octant order (times scale)
-    double scale;
   };
   Open open[kPathLevels + 1];
   frame.project({0, 0, 0}, 0, {0, 0, 0}, 0, open[0].p);
@@ -696,7 +698,7 @@ template <bool kFirstOnly, class K, class OnLeaf>
     // Expand the pair open at level l.
     Open& o = *top;
     const int l = int(top - open);
-    const Level& lv = frame.level(l);
+    const Level& lv = frame.template level<!kFirstOnly>(l);
     const int side = lv.split_a ? 0 : 1;
     const uint32_t index = o.index[side];
     // The other box is a leaf and holds this one whole: any leaf below is a
@@ -712,25 +714,28 @@ template <bool kFirstOnly, class K, class OnLeaf>
         return;
       }
     }
-    const LevelTables& t = frame.template tables<!kFirstOnly>(l);
     const uint8_t mask = lv.masks[index];
     const int count = kOctants.count[mask];
-    const uint32_t hits = PairFrame<K>::template children_overlap<!kFirstOnly>(t, o.p, kOctants.octant[mask], count);
+    const uint32_t hits = PairFrame<K>::template children_overlap<!kFirstOnly>(lv, o.p, kOctants.octant[mask], count);
     result.box_tests += uint64_t(count);
     o.next = o.count = 0;
     if (hits != 0) {
       // Squared centre distances of the children by octant (lanes 0..2: the
-      // offset in A's axes), the same sums as the kernel's (by octant).
+      // offset in A's axes), the same sums as the kernel's (by octant); only
+      // needed to rank two or more.
       alignas(32) double key[8];
-      if (kFirstOnly)
+      const bool ranked = kFirstOnly && (hits & (hits - 1)) != 0;
+      if (ranked) {
+        const double(*centre)[8] = frame.centres(lv);
         for (int h = 0; h < 8; h += 4) {
           v4d x, y, z;
-          load4(x, t.centre[0] + h);
-          load4(y, t.centre[1] + h);
-          load4(z, t.centre[2] + h);
-          x = o.p[0] + x * t.scale, y = o.p[1] + y * t.scale, z = o.p[2] + z * t.scale;
+          load4(x, centre[0] + h);
+          load4(y, centre[1] + h);
+          load4(z, centre[2] + h);
+          x = o.p[0] + x * lv.scale, y = o.p[1] + y * lv.scale, z = o.p[2] + z * lv.scale;
           store4(key + h, (x * x + y * y) + z * z);
         }
+      }
       const auto report = [&](int j) {
         const Packed grown = child_of(o.coord[side], uint8_t(j));
         lv.split_a ? on_leaf(unpack(grown), unpack(o.coord[1])) : on_leaf(unpack(o.coord[0]), unpack(grown));
@@ -751,28 +756,27 @@ template <bool kFirstOnly, class K, class OnLeaf>
         for (uint32_t rest = hits; rest != 0; rest &= rest - 1) report(std::countr_zero(rest));
       } else {
         int m = 0;
-        if (kFirstOnly) {
+        if (ranked) {
           m = K::nearest_order(key, hits, o.order);
         } else {
-          // Every overlapping pair is visited: the order cannot matter.
+          // One child, or every overlapping pair is visited: the order
+          // cannot matter.
           for (uint32_t rest = hits; rest != 0; rest &= rest - 1) o.order[m++] = uint8_t(std::countr_zero(rest));
         }
         o.count = uint8_t(m);
         o.first = (lv.split_a ? *a.tree : *b.tree).first_child(lv.d, index);
         o.mask = mask;
-        o.split = uint8_t(side);
-        o.offset = t.offset;
-        o.scale = t.scale;
       }
     }
     // Back to the deepest level with a child left to visit.
     while (top->next == top->count)
       if (top-- == open) return;
     Open& parent = *top;
+    const Level& plv = frame.known_level(int(top - open));
     Open& child = *++top;
     const uint8_t j = parent.order[parent.next++];
-    const int split = parent.split;
-    add_lanes<kFirstOnly>(child.p, parent.p, parent.offset[j], parent.scale);
+    const int split = plv.split_a ? 0 : 1;
+    add_lanes<kFirstOnly>(child.p, parent.p, plv.offset[j], plv.scale);
     child.index[0] = parent.index[0], child.index[1] = parent.index[1];
     child.coord[0] = parent.coord[0], child.coord[1] = parent.coord[1];
     child.index[split] = parent.first + uint32_t(std::popcount(unsigned(parent.mask & ((1u << j) - 1))));
