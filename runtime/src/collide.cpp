@@ -293,15 +293,15 @@ using v4d_mem = double __attribute__((vector_size(32), aligned(8), may_alias));
   }
 }
 
-// Radius of the padded box at depth d: weights . (half / 2^d + pad), as
-// base * 2^-d + padding.
-[[gnu::always_inline]] inline void fill_radii(double* base_out, double* padding_out, const v4d (*weights)[4],
-                                              const double* half, double pad) {
-  for (int c = 0; c < 4; ++c) {
-    const v4d w0 = weights[0][c], w1 = weights[1][c], w2 = weights[2][c];
-    store4(base_out + 4 * c, (w0 * half[0] + w1 * half[1]) + w2 * half[2]);
-    store4(padding_out + 4 * c, ((w0 + w1) + w2) * pad);
-  }
+// 16 lanes from five groups of three (lanes 0..2 of g0..g4), lane 15 zero:
+// four aligned stores (one load of a lane chunk then finds one store).
+[[gnu::always_inline]] inline void store_groups(double* out, const v4d& g0, const v4d& g1, const v4d& g2,
+                                                const v4d& g3, const v4d& g4) {
+  using v4l = int64_t __attribute__((vector_size(32)));
+  store4(out, __builtin_shuffle(g0, g1, v4l{0, 1, 2, 4}));
+  store4(out + 4, __builtin_shuffle(g1, g2, v4l{1, 2, 4, 5}));
+  store4(out + 8, __builtin_shuffle(g2, g3, v4l{2, 4, 5, 6}));
+  store4(out + 12, __builtin_shuffle(g4, v4d{}, v4l{0, 1, 2, 4}));
 }
 
 // out = a + b (times scale if kScale), 16 lanes: a child's projections, its
@@ -367,49 +367,54 @@ class PairFrame {
   [[gnu::always_inline]] PairFrame(const PlacedTree& a, const PlacedTree& b)
       : rel_(a, b) {
     const Eigen::Matrix3d& r = rel_.r;
-    const Eigen::Matrix3d& ar = rel_.abs_r;
-    // The weights in 4-lane chunks, built in registers (scalar stores read
-    // back as vectors would stall store forwarding). w[m]: weight of t_m in
-    // each projection; aw (bw): weights of A's (B's) half extents in the
-    // radii (Gottschalk's formulas, with |R| padded). Lanes as in the kernel.
-    const auto q = [&](int m, int i) { return r(m, i); };
-    const auto p = [&](int m, int i) { return ar(m, i); };
-    v4d w[3][4];  // assigned one by one: an aggregate initialiser zero-fills first
-    w[0][0] = v4d{1, 0, 0, q(0, 0)}; w[0][1] = v4d{q(0, 1), q(0, 2), 0, 0};
-    w[0][2] = v4d{0, q(2, 0), q(2, 1), q(2, 2)}; w[0][3] = v4d{-q(1, 0), -q(1, 1), -q(1, 2), 0};
-    w[1][0] = v4d{0, 1, 0, q(1, 0)}; w[1][1] = v4d{q(1, 1), q(1, 2), -q(2, 0), -q(2, 1)};
-    w[1][2] = v4d{-q(2, 2), 0, 0, 0}; w[1][3] = v4d{q(0, 0), q(0, 1), q(0, 2), 0};
-    w[2][0] = v4d{0, 0, 1, q(2, 0)}; w[2][1] = v4d{q(2, 1), q(2, 2), q(1, 0), q(1, 1)};
-    w[2][2] = v4d{q(1, 2), -q(0, 0), -q(0, 1), -q(0, 2)}; w[2][3] = v4d{0, 0, 0, 0};
-    v4d aw[3][4];  // assigned one by one: an aggregate initialiser zero-fills first
-    aw[0][0] = v4d{1, 0, 0, p(0, 0)}; aw[0][1] = v4d{p(0, 1), p(0, 2), 0, 0};
-    aw[0][2] = v4d{0, p(2, 0), p(2, 1), p(2, 2)}; aw[0][3] = v4d{p(1, 0), p(1, 1), p(1, 2), 0};
-    aw[1][0] = v4d{0, 1, 0, p(1, 0)}; aw[1][1] = v4d{p(1, 1), p(1, 2), p(2, 0), p(2, 1)};
-    aw[1][2] = v4d{p(2, 2), 0, 0, 0}; aw[1][3] = v4d{p(0, 0), p(0, 1), p(0, 2), 0};
-    aw[2][0] = v4d{0, 0, 1, p(2, 0)}; aw[2][1] = v4d{p(2, 1), p(2, 2), p(1, 0), p(1, 1)};
-    aw[2][2] = v4d{p(1, 2), p(0, 0), p(0, 1), p(0, 2)}; aw[2][3] = v4d{0, 0, 0, 0};
-    v4d bw[3][4];  // assigned one by one: an aggregate initialiser zero-fills first
-    bw[0][0] = v4d{p(0, 0), p(1, 0), p(2, 0), 1}; bw[0][1] = v4d{0, 0, 0, p(0, 2)};
-    bw[0][2] = v4d{p(0, 1), 0, p(1, 2), p(1, 1)}; bw[0][3] = v4d{0, p(2, 2), p(2, 1), 0};
-    bw[1][0] = v4d{p(0, 1), p(1, 1), p(2, 1), 0}; bw[1][1] = v4d{1, 0, p(0, 2), 0};
-    bw[1][2] = v4d{p(0, 0), p(1, 2), 0, p(1, 0)}; bw[1][3] = v4d{p(2, 2), 0, p(2, 0), 0};
-    bw[2][0] = v4d{p(0, 2), p(1, 2), p(2, 2), 0}; bw[2][1] = v4d{0, 1, p(0, 1), p(0, 0)};
-    bw[2][2] = v4d{0, p(1, 1), p(1, 0), 0}; bw[2][3] = v4d{p(2, 1), p(2, 0), 0, 0};
-    for (int m = 0; m < 3; ++m)
-      for (int c = 0; c < 4; ++c) store4(t_.w[m] + 4 * c, w[m][c]);
+    const Eigen::Matrix3d& abs_r = rel_.abs_r;
+    // Lanes as in the kernel, built from the rows of R and |R| and the
+    // columns of |R| (|R| padded; lane 3 zero) in groups of three lanes.
+    v4d rr[3], ar[3], ac[3];
+    for (int m = 0; m < 3; ++m) {
+      rr[m] = v4d{r(m, 0), r(m, 1), r(m, 2), 0};
+      ar[m] = v4d{abs_r(m, 0), abs_r(m, 1), abs_r(m, 2), 0};
+      ac[m] = v4d{abs_r(0, m), abs_r(1, m), abs_r(2, m), 0};
+    }
+    // t_.w[m]: weight of t_m in each projection: e_m on A's faces, row m of R
+    // on B's, and on A_i x B_j (t_i2 r_i1j - t_i1 r_i2j) row i1 where m = i2,
+    // minus row i2 where m = i1.
+    const v4d zero{};
+    store_groups(t_.w[0], v4d{1, 0, 0, 0}, rr[0], zero, rr[2], -rr[1]);
+    store_groups(t_.w[1], v4d{0, 1, 0, 0}, rr[1], -rr[2], zero, rr[0]);
+    store_groups(t_.w[2], v4d{0, 0, 1, 0}, rr[2], rr[1], -rr[0], zero);
     const Aabb& ba = a.tree->bounds();
     const Aabb& bb = b.tree->bounds();
     a_min_ = ba.min;
     b_min_ = bb.min;
     a_size_ = ba.max - ba.min;
     b_size_ = bb.max - bb.min;
-    double half_a[3], half_b[3];
+    // The radii (Gottschalk's formulas) of A's root, half extents h in A's
+    // axes: h on A's faces, |R|^T h on B's, h_i1 |R|_i2j + h_i2 |R|_i1j on
+    // A_i x B_j; B's root (g, in B's axes): |R| g on A's faces, g on B's,
+    // g_j1 |R|_ij2 + g_j2 |R|_ij1 on A_i x B_j. Padding: the same sums of
+    // |R| times pad. Terms summed in the order of h_0, h_1, h_2 (g_0, g_1,
+    // g_2): the bits do not depend on how the lanes are built.
+    const double h0 = 0.5 * a_size_[0], h1 = 0.5 * a_size_[1], h2 = 0.5 * a_size_[2];
+    const double g0 = 0.5 * rel_.s * b_size_[0], g1 = 0.5 * rel_.s * b_size_[1], g2 = 0.5 * rel_.s * b_size_[2];
+    const double pad = rel_.pad;
+    const v4d pads{pad, pad, pad, 0};
+    store_groups(t_.base_a, v4d{h0, h1, h2, 0}, (ar[0] * h0 + ar[1] * h1) + ar[2] * h2, ar[2] * h1 + ar[1] * h2,
+                 ar[2] * h0 + ar[0] * h2, ar[1] * h0 + ar[0] * h1);
+    store_groups(t_.padding_a, pads, ((ar[0] + ar[1]) + ar[2]) * pad, (ar[2] + ar[1]) * pad, (ar[2] + ar[0]) * pad,
+                 (ar[1] + ar[0]) * pad);
+    using v4l = int64_t __attribute__((vector_size(32)));
+    const v4d gj1{g1, g0, g0, 0}, gj2{g2, g2, g1, 0};  // g_j1 / g_j2 by lane j, each in the order of g
+    v4d cross_b[3], cross_pad_b[3];
     for (int i = 0; i < 3; ++i) {
-      half_a[i] = 0.5 * a_size_[i];
-      half_b[i] = 0.5 * rel_.s * b_size_[i];
+      const v4d x = __builtin_shuffle(ar[i], v4l{2, 2, 1, 3}), y = __builtin_shuffle(ar[i], v4l{1, 0, 0, 3});
+      cross_b[i] = gj1 * x + gj2 * y;
+      cross_pad_b[i] = (x + y) * pad;
     }
-    fill_radii(t_.base_a, t_.padding_a, aw, half_a, rel_.pad);
-    fill_radii(t_.base_b, t_.padding_b, bw, half_b, rel_.pad);
+    store_groups(t_.base_b, (ac[0] * g0 + ac[1] * g1) + ac[2] * g2, v4d{g0, g1, g2, 0}, cross_b[0], cross_b[1],
+                 cross_b[2]);
+    store_groups(t_.padding_b, ((ac[0] + ac[1]) + ac[2]) * pad, pads, cross_pad_b[0], cross_pad_b[1],
+                 cross_pad_b[2]);
     // For the split schedule (fill_level): half diagonals in A's units.
     size_a_ = (0.5 * a_size_).squaredNorm();
     size_b_ = (0.5 * rel_.s * b_size_).squaredNorm();
@@ -693,11 +698,11 @@ template <bool kFirstOnly, class K, class OnLeaf>
   }
   open[0].coord[0] = open[0].coord[1] = 0;
   open[0].index[0] = open[0].index[1] = 0;
-  Open* top = open;  // the pair open at the deepest level
+  Open* top = open;  // the pair open at the deepest level, l
+  int l = 0;
   for (;;) {
     // Expand the pair open at level l.
     Open& o = *top;
-    const int l = int(top - open);
     const Level& lv = frame.template level<!kFirstOnly>(l);
     const int side = lv.split_a ? 0 : 1;
     const uint32_t index = o.index[side];
@@ -769,11 +774,12 @@ template <bool kFirstOnly, class K, class OnLeaf>
       }
     }
     // Back to the deepest level with a child left to visit.
-    while (top->next == top->count)
+    for (; top->next == top->count; --l)
       if (top-- == open) return;
     Open& parent = *top;
-    const Level& plv = frame.known_level(int(top - open));
+    const Level& plv = frame.known_level(l);
     Open& child = *++top;
+    ++l;
     const uint8_t j = parent.order[parent.next++];
     const int split = plv.split_a ? 0 : 1;
     add_lanes<kFirstOnly>(child.p, parent.p, plv.offset[j], plv.scale);
