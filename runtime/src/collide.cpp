@@ -256,11 +256,10 @@ struct LaneTables {
   // Offsets of the 8 children at depth 1, octant order, per tree (filled when
   // the tree first splits): at depth d they are these times 2^(1-d), exactly.
   alignas(64) Lanes offset_a[8], offset_b[8];
-  // Their lanes 0..2 by octant (centre_a[k][j] = offset_a[j][k]): collide only.
+  // Their lanes 0..2 by octant (centre_a[k][j] = offset_a[j][k]): collide only,
+  // filled when first needed to rank children.
   alignas(32) double centre_a[3][8], centre_b[3][8];
-  // Radius of a padded box on every axis at depth d: base * 2^-d + padding
-  // (filled per depth when the descent first reaches it: most pair tests end
-  // after a few depths).
+  // Radius of a padded box on every axis at depth d: base * 2^-d + padding.
   alignas(64) Lanes base_a, base_b, padding_a, padding_b;
 };
 
@@ -294,15 +293,15 @@ using v4d_mem = double __attribute__((vector_size(32), aligned(8), may_alias));
   }
 }
 
-// Radius of the padded box at depth d: weights . (half / 2^d + pad), as
-// base * 2^-d + padding.
-[[gnu::always_inline]] inline void fill_radii(double* base_out, double* padding_out, const v4d (*weights)[4],
-                                              const double* half, double pad) {
-  for (int c = 0; c < 4; ++c) {
-    const v4d w0 = weights[0][c], w1 = weights[1][c], w2 = weights[2][c];
-    store4(base_out + 4 * c, (w0 * half[0] + w1 * half[1]) + w2 * half[2]);
-    store4(padding_out + 4 * c, ((w0 + w1) + w2) * pad);
-  }
+// 16 lanes from five groups of three (lanes 0..2 of g0..g4), lane 15 zero:
+// four aligned stores (one load of a lane chunk then finds one store).
+[[gnu::always_inline]] inline void store_groups(double* out, const v4d& g0, const v4d& g1, const v4d& g2,
+                                                const v4d& g3, const v4d& g4) {
+  using v4l = int64_t __attribute__((vector_size(32)));
+  store4(out, __builtin_shuffle(g0, g1, v4l{0, 1, 2, 4}));
+  store4(out + 4, __builtin_shuffle(g1, g2, v4l{1, 2, 4, 5}));
+  store4(out + 8, __builtin_shuffle(g2, g3, v4l{2, 4, 5, 6}));
+  store4(out + 12, __builtin_shuffle(g4, v4d{}, v4l{0, 1, 2, 4}));
 }
 
 // out = a + b (times scale if kScale), 16 lanes: a child's projections, its
@@ -341,98 +340,103 @@ constexpr int kPathLevels = 2 * kMaxDepth;
 
 // One step of the descent. Which box splits depends only on the two depths
 // (da, db), and every step adds one to da + db, so all box pairs at path
-// level L = da + db have the same depths and split the same side: the split
-// schedule is one entry per level, worked out once per pair.
-struct Level {
-  bool split_a;     // A's box splits (else B's)
-  bool other_leaf;  // the other box is a leaf (containment early out)
-  uint8_t d;        // depth of the split box (its children: d + 1)
-  uint8_t other;    // depth of the other box
-  const uint8_t* masks;  // child masks of the split tree at depth d
-};
-
-// Tables of one level, filled when the descent first expands a pair there.
+// level L = da + db have the same depths and split the same side. A level is
+// worked out when the descent first expands a pair there (levels are reached
+// in order; most pair tests end after a few): its split and its tables.
 // collide_all (kScaled) scales the offsets once per level, and collide,
 // which mostly expands few pairs per level, in the kernel.
-struct LevelTables {
-  alignas(64) Lanes radius;   // radii of a child and of the other box, summed
-  const Lanes* offset;        // the children's offsets, octant order (times scale)
-  double scale;               // 1 if kScaled, else 2^-d
-  const double (*centre)[8];  // lanes 0..2 of the depth-1 offsets: centre[k][octant]
+struct Level {
+  alignas(64) Lanes radius;  // radii of a child and of the other box, summed
+  const Lanes* offset;       // the children's offsets, octant order (times scale)
+  double scale;              // 1 if kScaled, else 2^-d
+  const uint8_t* masks;      // child masks of the split tree at depth d
+  uint8_t da, db;            // depths of the box pairs at this level
+  bool split_a;              // A's box splits (else B's)
+  bool other_leaf;           // the other box is a leaf (containment early out)
+  uint8_t d;                 // depth of the split box (its children: d + 1)
+  uint8_t other;             // depth of the other box
 };
 
 // ---- The pair frame --------------------------------------------------------
-// Per pair: the projection matrix W (p = W t), the split schedule, and
-// lazily: per tree the depth-1 child offsets, per depth and tree the 16-lane
-// radii, per level the summed radii and scaled offsets.
+// Per pair: the projection matrix W (p = W t), the radii's terms, and lazily:
+// per tree the depth-1 child offsets, per level its split, summed radii and
+// (scaled) offsets.
 template <class K>
 class PairFrame {
  public:
   [[gnu::always_inline]] PairFrame(const PlacedTree& a, const PlacedTree& b)
       : rel_(a, b) {
     const Eigen::Matrix3d& r = rel_.r;
-    const Eigen::Matrix3d& ar = rel_.abs_r;
-    // The weights in 4-lane chunks, built in registers (scalar stores read
-    // back as vectors would stall store forwarding). w[m]: weight of t_m in
-    // each projection; aw (bw): weights of A's (B's) half extents in the
-    // radii (Gottschalk's formulas, with |R| padded). Lanes as in the kernel.
-    const auto q = [&](int m, int i) { return r(m, i); };
-    const auto p = [&](int m, int i) { return ar(m, i); };
-    v4d w[3][4];  // assigned one by one: an aggregate initialiser zero-fills first
-    w[0][0] = v4d{1, 0, 0, q(0, 0)}; w[0][1] = v4d{q(0, 1), q(0, 2), 0, 0};
-    w[0][2] = v4d{0, q(2, 0), q(2, 1), q(2, 2)}; w[0][3] = v4d{-q(1, 0), -q(1, 1), -q(1, 2), 0};
-    w[1][0] = v4d{0, 1, 0, q(1, 0)}; w[1][1] = v4d{q(1, 1), q(1, 2), -q(2, 0), -q(2, 1)};
-    w[1][2] = v4d{-q(2, 2), 0, 0, 0}; w[1][3] = v4d{q(0, 0), q(0, 1), q(0, 2), 0};
-    w[2][0] = v4d{0, 0, 1, q(2, 0)}; w[2][1] = v4d{q(2, 1), q(2, 2), q(1, 0), q(1, 1)};
-    w[2][2] = v4d{q(1, 2), -q(0, 0), -q(0, 1), -q(0, 2)}; w[2][3] = v4d{0, 0, 0, 0};
-    v4d aw[3][4];  // assigned one by one: an aggregate initialiser zero-fills first
-    aw[0][0] = v4d{1, 0, 0, p(0, 0)}; aw[0][1] = v4d{p(0, 1), p(0, 2), 0, 0};
-    aw[0][2] = v4d{0, p(2, 0), p(2, 1), p(2, 2)}; aw[0][3] = v4d{p(1, 0), p(1, 1), p(1, 2), 0};
-    aw[1][0] = v4d{0, 1, 0, p(1, 0)}; aw[1][1] = v4d{p(1, 1), p(1, 2), p(2, 0), p(2, 1)};
-    aw[1][2] = v4d{p(2, 2), 0, 0, 0}; aw[1][3] = v4d{p(0, 0), p(0, 1), p(0, 2), 0};
-    aw[2][0] = v4d{0, 0, 1, p(2, 0)}; aw[2][1] = v4d{p(2, 1), p(2, 2), p(1, 0), p(1, 1)};
-    aw[2][2] = v4d{p(1, 2), p(0, 0), p(0, 1), p(0, 2)}; aw[2][3] = v4d{0, 0, 0, 0};
-    v4d bw[3][4];  // assigned one by one: an aggregate initialiser zero-fills first
-    bw[0][0] = v4d{p(0, 0), p(1, 0), p(2, 0), 1}; bw[0][1] = v4d{0, 0, 0, p(0, 2)};
-    bw[0][2] = v4d{p(0, 1), 0, p(1, 2), p(1, 1)}; bw[0][3] = v4d{0, p(2, 2), p(2, 1), 0};
-    bw[1][0] = v4d{p(0, 1), p(1, 1), p(2, 1), 0}; bw[1][1] = v4d{1, 0, p(0, 2), 0};
-    bw[1][2] = v4d{p(0, 0), p(1, 2), 0, p(1, 0)}; bw[1][3] = v4d{p(2, 2), 0, p(2, 0), 0};
-    bw[2][0] = v4d{p(0, 2), p(1, 2), p(2, 2), 0}; bw[2][1] = v4d{0, 1, p(0, 1), p(0, 0)};
-    bw[2][2] = v4d{0, p(1, 1), p(1, 0), 0}; bw[2][3] = v4d{p(2, 1), p(2, 0), 0, 0};
-    for (int m = 0; m < 3; ++m)
-      for (int c = 0; c < 4; ++c) store4(t_.w[m] + 4 * c, w[m][c]);
+    const Eigen::Matrix3d& abs_r = rel_.abs_r;
+    // Lanes as in the kernel, built from the rows of R and |R| and the
+    // columns of |R| (|R| padded; lane 3 zero) in groups of three lanes.
+    v4d rr[3], ar[3], ac[3];
+    for (int m = 0; m < 3; ++m) {
+      rr[m] = v4d{r(m, 0), r(m, 1), r(m, 2), 0};
+      ar[m] = v4d{abs_r(m, 0), abs_r(m, 1), abs_r(m, 2), 0};
+      ac[m] = v4d{abs_r(0, m), abs_r(1, m), abs_r(2, m), 0};
+    }
+    // t_.w[m]: weight of t_m in each projection: e_m on A's faces, row m of R
+    // on B's, and on A_i x B_j (t_i2 r_i1j - t_i1 r_i2j) row i1 where m = i2,
+    // minus row i2 where m = i1.
+    const v4d zero{};
+    store_groups(t_.w[0], v4d{1, 0, 0, 0}, rr[0], zero, rr[2], -rr[1]);
+    store_groups(t_.w[1], v4d{0, 1, 0, 0}, rr[1], -rr[2], zero, rr[0]);
+    store_groups(t_.w[2], v4d{0, 0, 1, 0}, rr[2], rr[1], -rr[0], zero);
     const Aabb& ba = a.tree->bounds();
     const Aabb& bb = b.tree->bounds();
     a_min_ = ba.min;
     b_min_ = bb.min;
     a_size_ = ba.max - ba.min;
     b_size_ = bb.max - bb.min;
-    double half_a[3], half_b[3];
+    // The radii (Gottschalk's formulas) of A's root, half extents h in A's
+    // axes: h on A's faces, |R|^T h on B's, h_i1 |R|_i2j + h_i2 |R|_i1j on
+    // A_i x B_j; B's root (g, in B's axes): |R| g on A's faces, g on B's,
+    // g_j1 |R|_ij2 + g_j2 |R|_ij1 on A_i x B_j. Padding: the same sums of
+    // |R| times pad. Terms summed in the order of h_0, h_1, h_2 (g_0, g_1,
+    // g_2): the bits do not depend on how the lanes are built.
+    const double h0 = 0.5 * a_size_[0], h1 = 0.5 * a_size_[1], h2 = 0.5 * a_size_[2];
+    const double g0 = 0.5 * rel_.s * b_size_[0], g1 = 0.5 * rel_.s * b_size_[1], g2 = 0.5 * rel_.s * b_size_[2];
+    const double pad = rel_.pad;
+    const v4d pads{pad, pad, pad, 0};
+    store_groups(t_.base_a, v4d{h0, h1, h2, 0}, (ar[0] * h0 + ar[1] * h1) + ar[2] * h2, ar[2] * h1 + ar[1] * h2,
+                 ar[2] * h0 + ar[0] * h2, ar[1] * h0 + ar[0] * h1);
+    store_groups(t_.padding_a, pads, ((ar[0] + ar[1]) + ar[2]) * pad, (ar[2] + ar[1]) * pad, (ar[2] + ar[0]) * pad,
+                 (ar[1] + ar[0]) * pad);
+    using v4l = int64_t __attribute__((vector_size(32)));
+    const v4d gj1{g1, g0, g0, 0}, gj2{g2, g2, g1, 0};  // g_j1 / g_j2 by lane j, each in the order of g
+    v4d cross_b[3], cross_pad_b[3];
     for (int i = 0; i < 3; ++i) {
-      half_a[i] = 0.5 * a_size_[i];
-      half_b[i] = 0.5 * rel_.s * b_size_[i];
+      const v4d x = __builtin_shuffle(ar[i], v4l{2, 2, 1, 3}), y = __builtin_shuffle(ar[i], v4l{1, 0, 0, 3});
+      cross_b[i] = gj1 * x + gj2 * y;
+      cross_pad_b[i] = (x + y) * pad;
     }
-    fill_radii(t_.base_a, t_.padding_a, aw, half_a, rel_.pad);
-    fill_radii(t_.base_b, t_.padding_b, bw, half_b, rel_.pad);
-    // The split schedule: the larger box splits (half diagonals in A's units,
-    // both halving with each depth; a tree already at its depth cannot).
-    const double size_a = (0.5 * a_size_).squaredNorm(), size_b = (0.5 * rel_.s * b_size_).squaredNorm();
-    levels_ = a.depth + b.depth;
-    int da = 0, db = 0;
-    for (int l = 0; l < levels_; ++l) {
-      const bool sa = da < a.depth && (db == b.depth || size_a * kHalfPow[2 * da] >= size_b * kHalfPow[2 * db]);
-      Level& lv = level_[l];
-      lv.split_a = sa;
-      lv.d = uint8_t(sa ? da : db);
-      lv.other = uint8_t(sa ? db : da);
-      lv.other_leaf = sa ? db == b.depth : da == a.depth;
-      lv.masks = (sa ? a.tree : b.tree)->masks().masks[size_t(lv.d)].data();
-      (sa ? da : db) += 1;
-    }
+    store_groups(t_.base_b, (ac[0] * g0 + ac[1] * g1) + ac[2] * g2, v4d{g0, g1, g2, 0}, cross_b[0], cross_b[1],
+                 cross_b[2]);
+    store_groups(t_.padding_b, ((ac[0] + ac[1]) + ac[2]) * pad, pads, cross_pad_b[0], cross_pad_b[1],
+                 cross_pad_b[2]);
+    // For the split schedule (fill_level): half diagonals in A's units.
+    size_a_ = (0.5 * a_size_).squaredNorm();
+    size_b_ = (0.5 * rel_.s * b_size_).squaredNorm();
+    tree_a_ = a.tree;
+    tree_b_ = b.tree;
+    depth_a_ = a.depth;
+    depth_b_ = b.depth;
   }
 
-  int levels() const { return levels_; }
-  const Level& level(int l) const { return level_[l]; }
+  int levels() const { return depth_a_ + depth_b_; }
+
+  // Level l, worked out on first use: the descent expands a pair at level l
+  // only after one at l - 1 (one descent uses the frame, so always the same
+  // kScaled).
+  template <bool kScaled>
+  [[gnu::always_inline]] const Level& level(int l) const {
+    assert(l <= known_levels_);
+    if (l == known_levels_) fill_level<kScaled>(l);
+    return level_[l];
+  }
+  // A level already worked out.
+  const Level& known_level(int l) const { return level_[l]; }
 
   // Projections of box pair (A's ca at da, B's cb at db).
   void project(const Coord& ca, int da, const Coord& cb, int db, Lanes& p) const {
@@ -450,15 +454,12 @@ class PairFrame {
   }
 
   bool overlap(const double* p, int da, int db) const {
-    const double *ra = radius_a(da), *rb = radius_b(db);
     using v4l = int64_t __attribute__((vector_size(32)));
     v4l separated{};
     for (int k = 0; k < kLanes; k += 4) {
-      v4d pk, rak, rbk;
+      v4d pk, r;
       load4(pk, p + k);
-      load4(rak, ra + k);
-      load4(rbk, rb + k);
-      const v4d r = rak + rbk;
+      radius4(r, k, kHalfPow[da], kHalfPow[db]);
       separated |= (pk > r) | (-pk > r);  // |p| > r (negation is exact)
     }
     return !(separated[0] | separated[1] | separated[2] | separated[3]);
@@ -470,45 +471,56 @@ class PairFrame {
   // for B), where the inner box's radius bounds its extent (|R| padded).
   // Here: does the box about to split at level l lie inside the other one?
   bool split_box_inside(const double* p, const Level& lv) const {
-    return lv.split_a ? inside(p, radius_a(lv.d), radius_b(lv.other), 3)
-                      : inside(p, radius_b(lv.d), radius_a(lv.other), 0);
-  }
-
-  // The tables of level l (filled on first use; one descent uses the frame,
-  // so always the same kScaled).
-  template <bool kScaled>
-  [[gnu::always_inline]] const LevelTables& tables(int l) const {
-    if (!(filled_levels_ & (1u << l))) [[unlikely]]
-      fill_level<kScaled>(l);
-    return level_tables_[l];
+    const double hi = kHalfPow[lv.d], ho = kHalfPow[lv.other];
+    return lv.split_a ? inside(p, t_.base_a, t_.padding_a, hi, t_.base_b, t_.padding_b, ho, 3)
+                      : inside(p, t_.base_b, t_.padding_b, hi, t_.base_a, t_.padding_a, ho, 0);
   }
 
   // Test the children of the split box of level l against the other box: see
   // children_overlap.
   template <bool kScaled>
-  [[gnu::always_inline]] static uint32_t children_overlap(const LevelTables& t, const double* parent,
+  [[gnu::always_inline]] static uint32_t children_overlap(const Level& t, const double* parent,
                                                           const uint8_t* octant, int n) {
     return K::template children_overlap<!kScaled>(parent, t.radius, t.offset, t.scale, octant, n);
+  }
+
+  // Lanes 0..2 of the depth-1 offsets of the tree split at lv, by octant:
+  // centre[k][octant] (for the nearest-first keys).
+  const double (*centres(const Level& lv) const)[8] {
+    return lv.split_a ? centres(t_.centre_a, t_.offset_a, 4u) : centres(t_.centre_b, t_.offset_b, 8u);
   }
 
  private:
   template <bool kScaled>
   void fill_level(int l) const {
-    const Level& lv = level_[l];
-    const double *ra = radius_a(lv.split_a ? lv.d + 1 : lv.other), *rb = radius_b(lv.split_a ? lv.other : lv.d + 1);
-    LevelTables& t = level_tables_[l];
-    for (int k = 0; k < kLanes; k += 4) {
-      v4d x, y;
-      load4(x, ra + k);
-      load4(y, rb + k);
-      store4(t.radius + k, x + y);
+    Level& lv = level_[l];
+    int da = 0, db = 0;
+    if (l > 0) {
+      const Level& up = level_[l - 1];
+      da = up.da + up.split_a;
+      db = up.db + !up.split_a;
     }
-    const Lanes* depth1 = lv.split_a ? offsets_a() : offsets_b();
-    t.offset = depth1;
-    t.scale = kHalfPow[lv.d];
-    if (!kScaled) {
-      t.centre = lv.split_a ? centres(t_.centre_a, depth1, 4u) : centres(t_.centre_b, depth1, 8u);
-    } else if (lv.d > 0) {
+    // The larger box splits (half diagonals, both halving with each depth; a
+    // tree already at its depth cannot).
+    const bool sa = da < depth_a_ && (db == depth_b_ || size_a_ * kHalfPow[2 * da] >= size_b_ * kHalfPow[2 * db]);
+    lv.da = uint8_t(da);
+    lv.db = uint8_t(db);
+    lv.split_a = sa;
+    lv.d = uint8_t(sa ? da : db);
+    lv.other = uint8_t(sa ? db : da);
+    lv.other_leaf = sa ? db == depth_b_ : da == depth_a_;
+    lv.masks = (sa ? tree_a_ : tree_b_)->masks().masks[size_t(lv.d)].data();
+    // Radii of the box pairs below: the split side one depth deeper.
+    const double ha = kHalfPow[da + sa], hb = kHalfPow[db + !sa];
+    for (int k = 0; k < kLanes; k += 4) {
+      v4d r;
+      radius4(r, k, ha, hb);
+      store4(lv.radius + k, r);
+    }
+    const Lanes* depth1 = sa ? offsets_a() : offsets_b();
+    lv.offset = depth1;
+    lv.scale = kHalfPow[lv.d];
+    if (kScaled && lv.d > 0) {
       // Scaled by a power of two: exact, the same bits as scaling in the kernel.
       const double h = kHalfPow[lv.d];
       Lanes* scaled = level_offsets_[l];
@@ -518,12 +530,12 @@ class PairFrame {
           load4(x, depth1[j] + k);
           store4(scaled[j] + k, x * h);
         }
-      t.offset = scaled;
-      t.scale = 1;
-    } else {
-      t.scale = 1;
+      lv.offset = scaled;
+      lv.scale = 1;
+    } else if (kScaled) {
+      lv.scale = 1;
     }
-    filled_levels_ |= 1u << l;
+    ++known_levels_;
   }
 
   // centre[k][j] = offset[j][k], k < 3 (two 4x4 transpositions), filled once
@@ -582,40 +594,38 @@ class PairFrame {
     return t_.offset_b;
   }
 
-  // The 16-lane radii of A's (B's) boxes at depth d, filled on first use.
-  const double* radius_a(int d) const { return radius(d, t_.base_a, t_.padding_a, radius_a_, filled_a_); }
-  const double* radius_b(int d) const { return radius(d, t_.base_b, t_.padding_b, radius_b_, filled_b_); }
-  [[gnu::always_inline]] static const double* radius(int d, const double* base, const double* padding, Lanes* table,
-                                                     uint32_t& filled) {
-    if (!(filled & (1u << d))) [[unlikely]] {
-      const double h = kHalfPow[d];
-      for (int k = 0; k < kLanes; k += 4) {
-        v4d bk, pk;
-        load4(bk, base + k);
-        load4(pk, padding + k);
-        store4(table[d] + k, bk * h + pk);
-      }
-      filled |= 1u << d;
-    }
-    return table[d];
+  // Lanes k..k+3 of the summed radii of A's box at scale ha = 2^-da and B's
+  // at hb: each radius is base * 2^-d + padding (computed where needed: a
+  // table per depth cost more than it saved).
+  [[gnu::always_inline]] void radius4(v4d& r, int k, double ha, double hb) const {
+    v4d ba, pa, bb, pb;
+    load4(ba, t_.base_a + k);
+    load4(pa, t_.padding_a + k);
+    load4(bb, t_.base_b + k);
+    load4(pb, t_.padding_b + k);
+    r = (ba * ha + pa) + (bb * hb + pb);
   }
 
-  bool inside(const double* p, const double* inner, const double* outer, int lane) const {
+  bool inside(const double* p, const double* inner_base, const double* inner_padding, double hi,
+              const double* outer_base, const double* outer_padding, double ho, int lane) const {
     bool in = true;
-    for (int k = lane; k < lane + 3; ++k) in &= (std::abs(p[k]) + inner[k]) + rel_.pad <= outer[k];
+    for (int k = lane; k < lane + 3; ++k)
+      in &= (std::abs(p[k]) + (inner_base[k] * hi + inner_padding[k])) + rel_.pad <=
+            outer_base[k] * ho + outer_padding[k];
     return in;
   }
 
   Relative rel_;
-  int levels_;
   Eigen::Vector3d a_min_, b_min_, a_size_, b_size_;  // root sizes
-  Level level_[kPathLevels];
+  double size_a_, size_b_;  // squared half diagonals in A's units
+  const ObjectTree *tree_a_, *tree_b_;
+  int depth_a_, depth_b_;
   // Filled lazily (the frame is used by one descent only).
   mutable LaneTables t_;
-  alignas(64) mutable Lanes radius_a_[kMaxDepth + 1], radius_b_[kMaxDepth + 1];
-  mutable LevelTables level_tables_[kPathLevels];
+  mutable Level level_[kPathLevels];
   alignas(64) mutable Lanes level_offsets_[kPathLevels][8];
-  mutable uint32_t filled_a_ = 0, filled_b_ = 0, filled_levels_ = 0, filled_offsets_ = 0;
+  mutable int known_levels_ = 0;  // levels 0..known_levels_ - 1 are worked out
+  mutable uint32_t filled_offsets_ = 0;
 };
 
 // The occupied octants of every child mask, in order.
@@ -675,9 +685,6 @@ template <bool kFirstOnly, class K, class OnLeaf>
     uint8_t next, count;  // children to visit: order[next..count)
     uint8_t order[8];     // their octants, visiting order
     uint8_t mask;         // the split box's child mask
-    uint8_t split;        // the split side: 0 A, 1 B
-    const Lanes* offset;  // the children's offsets, octant order (times scale)
-    double scale;
   };
   Open open[kPathLevels + 1];
   frame.project({0, 0, 0}, 0, {0, 0, 0}, 0, open[0].p);
@@ -691,12 +698,12 @@ template <bool kFirstOnly, class K, class OnLeaf>
   }
   open[0].coord[0] = open[0].coord[1] = 0;
   open[0].index[0] = open[0].index[1] = 0;
-  Open* top = open;  // the pair open at the deepest level
+  Open* top = open;  // the pair open at the deepest level, l
+  int l = 0;
   for (;;) {
     // Expand the pair open at level l.
     Open& o = *top;
-    const int l = int(top - open);
-    const Level& lv = frame.level(l);
+    const Level& lv = frame.template level<!kFirstOnly>(l);
     const int side = lv.split_a ? 0 : 1;
     const uint32_t index = o.index[side];
     // The other box is a leaf and holds this one whole: any leaf below is a
@@ -712,25 +719,28 @@ template <bool kFirstOnly, class K, class OnLeaf>
         return;
       }
     }
-    const LevelTables& t = frame.template tables<!kFirstOnly>(l);
     const uint8_t mask = lv.masks[index];
     const int count = kOctants.count[mask];
-    const uint32_t hits = PairFrame<K>::template children_overlap<!kFirstOnly>(t, o.p, kOctants.octant[mask], count);
+    const uint32_t hits = PairFrame<K>::template children_overlap<!kFirstOnly>(lv, o.p, kOctants.octant[mask], count);
     result.box_tests += uint64_t(count);
     o.next = o.count = 0;
     if (hits != 0) {
       // Squared centre distances of the children by octant (lanes 0..2: the
-      // offset in A's axes), the same sums as the kernel's (by octant).
+      // offset in A's axes), the same sums as the kernel's (by octant); only
+      // needed to rank two or more.
       alignas(32) double key[8];
-      if (kFirstOnly)
+      const bool ranked = kFirstOnly && (hits & (hits - 1)) != 0;
+      if (ranked) {
+        const double(*centre)[8] = frame.centres(lv);
         for (int h = 0; h < 8; h += 4) {
           v4d x, y, z;
-          load4(x, t.centre[0] + h);
-          load4(y, t.centre[1] + h);
-          load4(z, t.centre[2] + h);
-          x = o.p[0] + x * t.scale, y = o.p[1] + y * t.scale, z = o.p[2] + z * t.scale;
+          load4(x, centre[0] + h);
+          load4(y, centre[1] + h);
+          load4(z, centre[2] + h);
+          x = o.p[0] + x * lv.scale, y = o.p[1] + y * lv.scale, z = o.p[2] + z * lv.scale;
           store4(key + h, (x * x + y * y) + z * z);
         }
+      }
       const auto report = [&](int j) {
         const Packed grown = child_of(o.coord[side], uint8_t(j));
         lv.split_a ? on_leaf(unpack(grown), unpack(o.coord[1])) : on_leaf(unpack(o.coord[0]), unpack(grown));
@@ -751,28 +761,28 @@ template <bool kFirstOnly, class K, class OnLeaf>
         for (uint32_t rest = hits; rest != 0; rest &= rest - 1) report(std::countr_zero(rest));
       } else {
         int m = 0;
-        if (kFirstOnly) {
+        if (ranked) {
           m = K::nearest_order(key, hits, o.order);
         } else {
-          // Every overlapping pair is visited: the order cannot matter.
+          // One child, or every overlapping pair is visited: the order
+          // cannot matter.
           for (uint32_t rest = hits; rest != 0; rest &= rest - 1) o.order[m++] = uint8_t(std::countr_zero(rest));
         }
         o.count = uint8_t(m);
         o.first = (lv.split_a ? *a.tree : *b.tree).first_child(lv.d, index);
         o.mask = mask;
-        o.split = uint8_t(side);
-        o.offset = t.offset;
-        o.scale = t.scale;
       }
     }
     // Back to the deepest level with a child left to visit.
-    while (top->next == top->count)
+    for (; top->next == top->count; --l)
       if (top-- == open) return;
     Open& parent = *top;
+    const Level& plv = frame.known_level(l);
     Open& child = *++top;
+    ++l;
     const uint8_t j = parent.order[parent.next++];
-    const int split = parent.split;
-    add_lanes<kFirstOnly>(child.p, parent.p, parent.offset[j], parent.scale);
+    const int split = plv.split_a ? 0 : 1;
+    add_lanes<kFirstOnly>(child.p, parent.p, plv.offset[j], plv.scale);
     child.index[0] = parent.index[0], child.index[1] = parent.index[1];
     child.coord[0] = parent.coord[0], child.coord[1] = parent.coord[1];
     child.index[split] = parent.first + uint32_t(std::popcount(unsigned(parent.mask & ((1u << j) - 1))));
