@@ -179,7 +179,7 @@ void WorldTree::relink(uint32_t id, const Coord& lo, const Coord& hi, bool overf
   e.hi = hi;
   e.overflow = overflow;
   e.present = true;
-  lo_[id] = lo;
+  lo_[id] = packed(lo);
 }
 
 bool WorldTree::update(uint32_t id, const Aabb& box) { return update_cells(id, cell_range(box)); }
@@ -293,7 +293,7 @@ void WorldTree::finish_move(uint32_t id, const CellRange& r, const Move& m) {
   assert(j == m.enters);
   e.lo = r.lo;
   e.hi = r.hi;
-  lo_[id] = r.lo;
+  lo_[id] = packed(r.lo);
 }
 
 void WorldTree::update_cells(std::span<const uint32_t> ids, std::span<const CellRange> ranges, Parallel& parallel,
@@ -375,6 +375,22 @@ void radix_sort(std::vector<std::pair<uint32_t, uint32_t>>& v, std::vector<std::
 
 }  // namespace
 
+namespace {
+
+// Lane-wise max of two packed cell coordinates (three 16-bit lanes, each
+// below 2^10, so signed 16-bit max is right).
+uint64_t lane_max(uint64_t a, uint64_t b) {
+#if defined(__SSE2__)
+  return uint64_t(_mm_cvtsi128_si64(_mm_max_epi16(_mm_cvtsi64_si128(int64_t(a)), _mm_cvtsi64_si128(int64_t(b)))));
+#else
+  uint64_t m = 0;
+  for (int shift = 0; shift < 48; shift += 16) m |= std::max((a >> shift) & 0xFFFF, (b >> shift) & 0xFFFF) << shift;
+  return m;
+#endif
+}
+
+}  // namespace
+
 // Busy bitmap words per scan part: 512 cells, enough work to pay for handing
 // a part to another thread.
 constexpr size_t kWordsPerPart = 8;
@@ -396,18 +412,17 @@ void WorldTree::scan_cells(size_t begin, size_t end, Keep keep, Emit emit) const
     for (int k = 0; k < count; ++k) {
       if (k + kAhead < count) __builtin_prefetch(cells_[slots[k + kAhead]].ids.data());
       const Cell& cell = cells_[slots[k]];
-      const std::vector<uint32_t>& ids = cell.ids;
-      for (size_t i = 0; i + 1 < ids.size(); ++i) {
+      const uint32_t* ids = cell.ids.data();
+      const size_t n = cell.ids.size();
+      const uint64_t at = packed(cell.at);
+      for (size_t i = 0; i + 1 < n; ++i) {
         const uint32_t a = ids[i];
-        const Coord& la = lo_[a];
-        // The first common cell of a and b is max(la, lb) per axis; since both
-        // are in this cell, it is this cell iff on each axis one of them starts here.
-        const bool ax = cell.at[0] == la[0], ay = cell.at[1] == la[1], az = cell.at[2] == la[2];
-        for (size_t j = i + 1; j < ids.size(); ++j) {
+        const uint64_t la = lo_[a];
+        for (size_t j = i + 1; j < n; ++j) {
           const uint32_t b = ids[j];
-          const Coord& lb = lo_[b];
-          if ((ax || cell.at[0] == lb[0]) && (ay || cell.at[1] == lb[1]) && (az || cell.at[2] == lb[2]) && keep(a, b))
-            emit(a, b);
+          // Both are in this cell, so their first common cell, max(la, lb)
+          // per axis, is this one iff it equals `at`.
+          if (lane_max(la, lo_[b]) == at && keep(a, b)) emit(a, b);
         }
       }
     }

@@ -202,6 +202,7 @@ class OCTBAKE_API WorldTree {
   };
 
   Coord cell_of(const Eigen::Vector3d& p) const;
+  static uint64_t packed(const Coord& c) { return uint64_t(c[0]) | uint64_t(c[1]) << 16 | uint64_t(c[2]) << 32; }
   // Cells in the inclusive range [lo, hi].
   static uint64_t cell_count(const Coord& lo, const Coord& hi) {
     uint64_t n = 1;
@@ -244,7 +245,9 @@ class OCTBAKE_API WorldTree {
   alignas(16) std::array<double, 6> origin6_{}, inv6_{};
   uint64_t reinsertions_ = 0;
   std::vector<Entry> entries_;  // by id
-  std::vector<Coord> lo_;       // hot copy of entries_[id].lo for the pair loop
+  // Hot copy of entries_[id].lo for the pair loop, packed (x | y << 16 |
+  // z << 32): the first-common-cell test is one lane-wise max and compare.
+  std::vector<uint64_t> lo_;
   std::vector<Cell> cells_;
   std::vector<uint32_t> free_cells_;  // emptied slots, reused LIFO
   // Bit per cell slot: set while the cell holds two or more objects. The pair
