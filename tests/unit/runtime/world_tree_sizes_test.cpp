@@ -32,20 +32,16 @@ struct Oracle {
     const double t = (x - world.min[k]) * (n / (world.max[k] - world.min[k]));
     return t >= n ? n - 1 : t > 0 ? int(t) : 0;
   }
-  bool overflow(const Aabb& b) const {
-    uint64_t count = 1;
-    for (int k = 0; k < 3; ++k) count *= uint64_t(cell(b.max[k], k) - cell(b.min[k], k) + 1);
-    return count > WorldTree::kMaxCells;
-  }
-  bool share_cell(const Aabb& a, const Aabb& b) const {
-    for (int k = 0; k < 3; ++k)
-      if (cell(a.max[k], k) < cell(b.min[k], k) || cell(b.max[k], k) < cell(a.min[k], k)) return false;
-    return true;
-  }
   uint64_t cells(const Aabb& b) const {
     uint64_t count = 1;
     for (int k = 0; k < 3; ++k) count *= uint64_t(cell(b.max[k], k) - cell(b.min[k], k) + 1);
     return count;
+  }
+  bool overflow(const Aabb& b) const { return cells(b) > WorldTree::kMaxCells; }
+  bool share_cell(const Aabb& a, const Aabb& b) const {
+    for (int k = 0; k < 3; ++k)
+      if (cell(a.max[k], k) < cell(b.min[k], k) || cell(b.max[k], k) < cell(a.min[k], k)) return false;
+    return true;
   }
   bool same_cells(const Aabb& a, const Aabb& b) const {
     for (int k = 0; k < 3; ++k)
