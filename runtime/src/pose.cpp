@@ -56,17 +56,15 @@ Aabb world_bounds(const OrientedBox& box) {
   extent *= 1.0 + 1e-12;
   Aabb out;
 #if defined(__SSE2__)
-  // next_down(x) = -next_up(-x): the six bounds as three pairs of next_up.
+  // next_down(x) = -next_up(-x): the six bounds as three pairs of next_up,
+  // paired in registers (scalar stores read back as pairs would stall).
+  const Eigen::Vector3d lo = box.center - extent, hi = box.center + extent;
   alignas(16) double v[6];
-  for (int i = 0; i < 3; ++i) {
-    v[i] = -(box.center[i] - extent[i]);
-    v[3 + i] = box.center[i] + extent[i];
-  }
-  for (int k = 0; k < 6; k += 2) _mm_store_pd(v + k, next_up(_mm_load_pd(v + k)));
-  for (int i = 0; i < 3; ++i) {
-    out.min[i] = -v[i];
-    out.max[i] = v[3 + i];
-  }
+  _mm_store_pd(v, next_up(_mm_set_pd(-lo[1], -lo[0])));
+  _mm_store_pd(v + 2, next_up(_mm_set_pd(hi[0], -lo[2])));
+  _mm_store_pd(v + 4, next_up(_mm_set_pd(hi[2], hi[1])));
+  out.min = {-v[0], -v[1], -v[2]};
+  out.max = {v[3], v[4], v[5]};
 #else
   for (int i = 0; i < 3; ++i) {
     out.min[i] = -next_up(-(box.center[i] - extent[i]));
