@@ -520,20 +520,20 @@ class PairFrame {
     const Lanes* depth1 = sa ? offsets_a() : offsets_b();
     lv.offset = depth1;
     lv.scale = kHalfPow[lv.d];
-    if (kScaled && lv.d > 0) {
-      // Scaled by a power of two: exact, the same bits as scaling in the kernel.
-      const double h = kHalfPow[lv.d];
-      Lanes* scaled = level_offsets_[l];
-      for (int j = 0; j < 8; ++j)
-        for (int k = 0; k < kLanes; k += 4) {
-          v4d x;
-          load4(x, depth1[j] + k);
-          store4(scaled[j] + k, x * h);
-        }
-      lv.offset = scaled;
+    if (kScaled) {
       lv.scale = 1;
-    } else if (kScaled) {
-      lv.scale = 1;
+      if (lv.d > 0) {
+        // Scaled by a power of two: exact, the same bits as scaling in the kernel.
+        const double h = kHalfPow[lv.d];
+        Lanes* scaled = level_offsets_[l];
+        for (int j = 0; j < 8; ++j)
+          for (int k = 0; k < kLanes; k += 4) {
+            v4d x;
+            load4(x, depth1[j] + k);
+            store4(scaled[j] + k, x * h);
+          }
+        lv.offset = scaled;
+      }
     }
     ++known_levels_;
   }

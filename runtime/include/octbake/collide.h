@@ -6,8 +6,9 @@
 // axis test of two oriented boxes; the descent starts at the two roots and,
 // at every overlapping box pair that is not yet a leaf pair, splits ONE box:
 // the larger one (half diagonal in A's units; a tree already at its depth
-// cannot split). Which box splits depends only on the two depths, so the
-// split schedule is worked out once per pair. All occupied children of the
+// cannot split). Which box splits depends only on the two depths, so each
+// level of the descent is worked out once per pair, when the descent first
+// reaches it (most pair tests end after a few). All occupied children of the
 // split box are tested against the other box in one go, and the overlapping
 // ones are visited nearest first (distance between box centres; collide_all,
 // which visits every one, takes them in octant order), depth first, with full
