@@ -6,6 +6,9 @@
 #include <zstd.h>
 
 #include <algorithm>
+#include <atomic>
+#include <exception>
+#include <future>
 #include <cassert>
 #include <memory>
 #include <new>
@@ -33,17 +36,23 @@ using CCtxPtr = std::unique_ptr<ZSTD_CCtx, decltype(&ZSTD_freeCCtx)>;
 // says, so small levels keep the single-threaded frames.
 constexpr size_t kMinJob = size_t(512) << 10;  // ZSTDMT_JOBSIZE_MIN
 constexpr size_t kMaxJob = size_t(4) << 20;
-constexpr size_t kJobsPerLevel = 8;  // enough to balance a few threads
+constexpr size_t kMostJobs = 8;  // enough to balance a few threads
 // Each job is primed with the last 1/16 of a window of the job before it (512
 // KiB at level 19): most of the long matches for a few percent of size.
 // Priming costs about what compressing the same bytes does, so a full-window
 // overlap would double the work.
 constexpr int kOverlapLog = 5;
 
+// Jobs of a level: as many as fit whole jobs of kMinJob, at most kMostJobs
+// unless that makes jobs larger than kMaxJob. Equal jobs (1.3 MB is two
+// of 650 KB, not 512 + 512 + 276, whose last job runs alone on two threads).
 // Depends on the level's size only, never on the threads.
-size_t job_size(size_t raw) { return std::clamp((raw + kJobsPerLevel - 1) / kJobsPerLevel, kMinJob, kMaxJob); }
+size_t job_count(size_t raw) {
+  const size_t fit = std::max<size_t>(raw / kMinJob, 1);
+  return std::max(std::min(fit, kMostJobs), (raw + kMaxJob - 1) / kMaxJob);
+}
 
-size_t job_count(size_t raw) { return raw <= kMinJob ? 1 : (raw + job_size(raw) - 1) / job_size(raw); }
+size_t job_size(size_t raw) { return std::max((raw + job_count(raw) - 1) / job_count(raw), kMinJob); }
 
 // A libzstd built without threads: single-threaded frames for every level,
 // still the same bytes for every thread count.
@@ -79,8 +88,60 @@ std::vector<uint8_t> zstd_frame(ZSTD_CCtx* cctx, std::span<const uint8_t> raw, i
   return frame;
 }
 
-flatbuffers::Offset<fb::Tree> encode_tree(flatbuffers::FlatBufferBuilder& fbb, ZSTD_CCtx* cctx,
-                                          const TreeToEncode& tree, int threads) {
+// The zstd frame of each level of `masks` (depth 1 first), or an empty vector
+// where the frame would not be smaller than the raw level. Never more than
+// `threads` compressions at once (zstd:19 slows by a third when its tables
+// share a core): first the single-job levels, largest first, on the calling
+// thread and threads - 1 helpers; then each split level on zstd's `threads`
+// workers, its jobs equal so that two or four threads end together. Every
+// frame is a function of its level's bytes only: the same for every
+// `threads`.
+std::vector<std::vector<uint8_t>> compress_levels(const OctreeMasks& masks, int level, int threads) {
+  const int depth = masks.depth();
+  std::vector<std::vector<uint8_t>> frames(depth);
+  auto compress = [&](ZSTD_CCtx* cctx, int d) {
+    const std::vector<uint8_t>& raw = masks.masks[d];
+    std::vector<uint8_t> frame = zstd_frame(cctx, raw, level, threads);
+    if (frame.size() < raw.size()) frames[d] = std::move(frame);
+  };
+  auto new_cctx = [] {
+    CCtxPtr cctx(ZSTD_createCCtx(), ZSTD_freeCCtx);
+    if (!cctx) throw std::bad_alloc();
+    return cctx;
+  };
+  std::vector<int> split, single;
+  for (int d = 0; d < depth; ++d) (job_count(masks.masks[d].size()) > 1 ? split : single).push_back(d);
+  std::stable_sort(single.begin(), single.end(),
+                   [&](int a, int b) { return masks.masks[a].size() > masks.masks[b].size(); });
+  CCtxPtr cctx = new_cctx();
+  std::atomic<size_t> next{0};
+  auto take_singles = [&](ZSTD_CCtx* c) {
+    for (size_t i; (i = next.fetch_add(1)) < single.size();) compress(c, single[i]);
+  };
+  const size_t helpers = single.empty() ? 0 : std::min(size_t(threads - 1), single.size() - 1);
+  std::vector<std::future<void>> running;
+  for (size_t h = 0; h < helpers; ++h)
+    running.push_back(std::async(std::launch::async, [&] { take_singles(new_cctx().get()); }));
+  // Helpers write into `frames`: an exception leaves only after they stop.
+  std::exception_ptr failed;
+  try {
+    take_singles(cctx.get());
+  } catch (...) {
+    failed = std::current_exception();
+    next = single.size();
+  }
+  for (std::future<void>& f : running) try {
+      f.get();
+    } catch (...) {
+      if (!failed) failed = std::current_exception();
+    }
+  if (failed) std::rethrow_exception(failed);
+  for (int d : split) compress(cctx.get(), d);
+  return frames;
+}
+
+flatbuffers::Offset<fb::Tree> encode_tree(flatbuffers::FlatBufferBuilder& fbb, const TreeToEncode& tree,
+                                          int threads) {
   const OctreeMasks& masks = tree.masks;
   const int depth = masks.depth();
   assert(depth == tree.options.depth && depth >= 1 && depth <= kMaxDepth);
@@ -88,23 +149,19 @@ flatbuffers::Offset<fb::Tree> encode_tree(flatbuffers::FlatBufferBuilder& fbb, Z
   assert(masks.bounds.min.allFinite() && masks.bounds.max.allFinite());
   assert((masks.bounds.min.array() <= masks.bounds.max.array()).all());
 
+  std::vector<std::vector<uint8_t>> frames;
+  if (tree.options.compression == Compression::zstd)
+    frames = compress_levels(masks, tree.options.compression_level, threads);
   std::vector<flatbuffers::Offset<fb::Level>> levels;
   levels.push_back(fb::CreateLevel(fbb, /*box_count=*/1, /*raw_size=*/0, fb::Compression::None,
                                    fbb.CreateVector(std::vector<uint8_t>{})));
   for (int d = 1; d <= depth; ++d) {
     const std::vector<uint8_t>& raw = masks.masks[d - 1];
     assert(raw.size() == masks.box_count(d - 1));
-    fb::Compression stored = fb::Compression::None;
-    flatbuffers::Offset<flatbuffers::Vector<uint8_t>> data;
-    if (tree.options.compression == Compression::zstd) {
-      std::vector<uint8_t> frame = zstd_frame(cctx, raw, tree.options.compression_level, threads);
-      if (frame.size() < raw.size()) {
-        stored = fb::Compression::Zstd;
-        data = fbb.CreateVector(frame);
-      }
-    }
-    if (stored == fb::Compression::None) data = fbb.CreateVector(raw);
-    levels.push_back(fb::CreateLevel(fbb, masks.box_count(d), raw.size(), stored, data));
+    const bool zstd = !frames.empty() && !frames[d - 1].empty();
+    levels.push_back(fb::CreateLevel(fbb, masks.box_count(d), raw.size(),
+                                     zstd ? fb::Compression::Zstd : fb::Compression::None,
+                                     fbb.CreateVector(zstd ? frames[d - 1] : raw)));
   }
   const auto levels_offset = fbb.CreateVector(levels);
   const auto name = fbb.CreateString(tree.name);
@@ -133,11 +190,9 @@ std::vector<uint8_t> encode_file(std::span<const TreeToEncode> trees, const std:
   // not depend on the values.
   flatbuffers::FlatBufferBuilder fbb(4096);
   fbb.ForceDefaults(true);
-  CCtxPtr cctx(ZSTD_createCCtx(), ZSTD_freeCCtx);
-  if (!cctx) throw std::bad_alloc();
   std::vector<flatbuffers::Offset<fb::Tree>> offsets;
   offsets.reserve(trees.size());
-  for (const TreeToEncode& t : trees) offsets.push_back(encode_tree(fbb, cctx.get(), t, threads));
+  for (const TreeToEncode& t : trees) offsets.push_back(encode_tree(fbb, t, threads));
   const auto trees_offset = fbb.CreateVector(offsets);
   const auto version = fbb.CreateString(baker_version);
   fb::FinishSizePrefixedFileBuffer(fbb, fb::CreateFile(fbb, kFormatVersion, version, trees_offset));
@@ -147,9 +202,15 @@ std::vector<uint8_t> encode_file(std::span<const TreeToEncode> trees, const std:
 int encode_threads_useful(std::span<const TreeToEncode> trees) {
   if (!zstd_has_threads()) return 1;
   size_t most = 1;
-  for (const TreeToEncode& t : trees)
-    if (t.options.compression == Compression::zstd)
-      for (const std::vector<uint8_t>& raw : t.masks.masks) most = std::max(most, job_count(raw.size()));
+  for (const TreeToEncode& t : trees) {
+    if (t.options.compression != Compression::zstd) continue;
+    size_t singles = 0;
+    for (const std::vector<uint8_t>& raw : t.masks.masks) {
+      const size_t jobs = job_count(raw.size());
+      singles += jobs == 1;
+      most = std::max({most, singles, jobs});
+    }
+  }
   return int(std::min(most, size_t(256)));
 }
 

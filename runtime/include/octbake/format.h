@@ -55,11 +55,13 @@ struct TreeToEncode {
 // Deterministic bytes for one or more trees (a pack when more than one): the
 // same trees, baker version and libzstd version give the same bytes, for
 // every `threads`. Each level is one zstd frame at options.compression_level,
-// or raw when compression is none or the frame would not be smaller. A level
-// larger than 512 KiB is compressed in jobs of a size fixed by the level's
-// size (zstd's multithreaded mode, which writes the same frame for any
-// worker count), up to `threads` jobs at once; the calling thread waits
-// meanwhile. Smaller levels are single-threaded frames.
+// or raw when compression is none or the frame would not be smaller. Never
+// more than `threads` compressions run at once: first the levels under 1 MiB,
+// each a frame of one job, on the calling thread and up to
+// threads - 1 helpers; then each larger level, in equal jobs whose count is
+// fixed by the level's size (zstd's multithreaded mode, which writes the
+// same frame for any worker count), up to `threads` jobs at once while the
+// calling thread waits.
 // Preconditions (asserted): at least one tree; unique, non-empty names;
 // masks.depth() == options.depth in 1..kMaxDepth; masks[d].size() equal to
 // the box count of depth d; finite bounds with min <= max; threads >= 1.
@@ -67,8 +69,9 @@ struct TreeToEncode {
 OCTBAKE_API std::vector<uint8_t> encode_file(std::span<const TreeToEncode> trees, const std::string& baker_version,
                                              int threads = 1);
 
-// The most threads encode_file can keep busy on these trees: the job count
-// of their largest compressed level (1 when no level is split in jobs).
+// The most threads encode_file can keep busy on these trees: for the tree
+// that has the most, the larger of its count of one-job levels and its most
+// jobs in one level (1 when nothing is compressed).
 OCTBAKE_API int encode_threads_useful(std::span<const TreeToEncode> trees);
 
 }  // namespace octbake
