@@ -221,7 +221,7 @@ void WorldTree::remove(uint32_t id) {
 namespace {
 
 // Items per part of the per-object phases.
-constexpr size_t kMoveGrain = 256;
+constexpr size_t kMoveGrain = 64;
 
 template <class F>
 void for_ranges(WorldTree::Parallel& parallel, size_t count, size_t grain, const F& f) {
