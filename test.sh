@@ -14,9 +14,10 @@ cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-g -O
 cmake --build build-asan -j"$jobs"
 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
   ctest --test-dir build-asan --output-on-failure -j"$jobs"
-# ThreadSanitizer: only the small tests/tsan folder (runtime library + two
+# ThreadSanitizer: only the small tests/tsan folder (runtime library + three
 # test files), so this pass stays short: baked files and loaded trees shared
-# across threads, and CollisionWorld's parallel parts on a 3-thread pool.
+# across threads, CollisionWorld's parallel parts on a 3-thread pool, and
+# encode_file's helper threads.
 cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="" \
   -DCMAKE_CXX_FLAGS="-fsanitize=thread -g -O1" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=thread" \
   -DOCTBAKE_WERROR=ON -DOCTBAKE_BUILD_TESTS=ON >/dev/null
