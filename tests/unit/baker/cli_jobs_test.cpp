@@ -88,31 +88,9 @@ TEST(CliJobs, OneLargeMeshSameBytesForEveryJobCount) {
   }
 }
 
-// A tree whose deepest level is 2 MiB of masks (every box above it full), in
-// a few patterns: compressible like real masks, and several zstd jobs long.
-TreeToEncode wide_tree() {
-  constexpr int kDepth = 8;
-  constexpr uint8_t kPatterns[] = {0x01, 0x03, 0x0f, 0x33, 0x55, 0xff};
-  std::mt19937 g(8);
-  TreeToEncode t;
-  t.name = "wide";
-  t.source_hash = "00";
-  t.options.depth = kDepth;
-  t.masks.bounds.max = {1, 2, 3};
-  size_t boxes = 1;
-  for (int d = 0; d < kDepth; ++d) {
-    std::vector<uint8_t> level(boxes, 0xff);
-    if (d + 1 == kDepth)
-      for (uint8_t& m : level) m = kPatterns[g() % std::size(kPatterns)];
-    t.masks.masks.push_back(std::move(level));
-    boxes *= 8;
-  }
-  return t;
-}
-
 // Level 5 for every thread count, level 19 (the default, slow) for 1 and 2.
 TEST(EncodeThreads, SameBytesForEveryThreadCount) {
-  TreeToEncode tree = wide_tree();
+  TreeToEncode tree = test::wide_tree();
   const size_t deepest = tree.masks.masks.back().size();
   EXPECT_GT(deepest, size_t(512) << 10);  // past zstd's single-threaded limit (ZSTDMT_JOBSIZE_MIN)
   EXPECT_GE(encode_threads_useful({&tree, 1}), 4);  // split in jobs: the multithreaded path runs

@@ -18,6 +18,8 @@
 #include <string>
 #include <vector>
 
+#include "unit/runtime/baked_test_util.h"  // unit(), wide_tree()
+
 namespace octbake::test {
 
 namespace fs = std::filesystem;
@@ -111,10 +113,6 @@ inline std::vector<uint8_t> read_bytes(const std::string& path) {
 inline void write_text(const std::string& path, const std::string& text) {
   std::ofstream(path, std::ios::binary) << text;
 }
-
-// Uniform in [0, 1) from the raw generator output (not std distributions,
-// which differ between standard libraries).
-inline double unit(std::mt19937& rng) { return rng() / 4294967296.0; }
 
 // `n` random triangles, each near a random centre in [-1, 1]^3 with edges up
 // to `size`, as OBJ text.

@@ -55,6 +55,29 @@ inline OctreeMasks random_masks(std::mt19937& rng, int depth, double p = 0.3, ui
   return m;
 }
 
+// A tree whose deepest level is 2 MiB of masks (every box above it full), in
+// a few patterns: compressible like real masks, and several zstd jobs long;
+// the seven levels above it are one job each (1 byte to 256 KiB).
+inline TreeToEncode wide_tree() {
+  constexpr int kDepth = 8;
+  constexpr uint8_t kPatterns[] = {0x01, 0x03, 0x0f, 0x33, 0x55, 0xff};
+  std::mt19937 g(8);
+  TreeToEncode t;
+  t.name = "wide";
+  t.source_hash = "00";
+  t.options.depth = kDepth;
+  t.masks.bounds.max = {1, 2, 3};
+  size_t boxes = 1;
+  for (int d = 0; d < kDepth; ++d) {
+    std::vector<uint8_t> level(boxes, 0xff);
+    if (d + 1 == kDepth)
+      for (uint8_t& m : level) m = kPatterns[g() % std::size(kPatterns)];
+    t.masks.masks.push_back(std::move(level));
+    boxes *= 8;
+  }
+  return t;
+}
+
 inline TreeToEncode random_tree(std::mt19937& rng, const std::string& name, int depth, Compression c) {
   TreeToEncode t;
   t.name = name;
