@@ -10,7 +10,8 @@
 // collide() with the exact OBBRSS BVH test of the box meshes) on the same
 // poses (BM_FclDynamicAabb), and against the World::step of commit 68d2b0b
 // with its fixed camera (BM_LegacyStep, tests/bench/legacy_world.h).
-// Heap allocations per timed frame are counted by replacing operator new.
+// Heap allocations per timed frame are counted by replacing operator new;
+// frame_median_us is the median timed frame (compare thread counts by it).
 //
 // Run: build with -DOCTBAKE_BENCH=ON, then
 //   ./build/tests/bench_world --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
@@ -21,7 +22,9 @@
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
 #include <fcl/narrowphase/collision.h>
 
+#include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <memory>
@@ -188,9 +191,29 @@ CollisionSettings collision_settings(const Scene& s, LodPolicy policy) {
   return c;
 }
 
+// Wall time of each timed frame. Their median is the counter to compare
+// thread counts by on a shared host: other tenants' bursts move the mean
+// (±15% between identical runs here) far more than the median.
+class FrameTimes {
+ public:
+  explicit FrameTimes(const benchmark::State& state) { us_.reserve(size_t(state.max_iterations)); }
+  void start() { t0_ = std::chrono::steady_clock::now(); }
+  void stop() { us_.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0_).count()); }
+  double median() {
+    if (us_.empty()) return 0;
+    std::nth_element(us_.begin(), us_.begin() + ptrdiff_t(us_.size() / 2), us_.end());
+    return us_[us_.size() / 2];
+  }
+
+ private:
+  std::vector<double> us_;
+  std::chrono::steady_clock::time_point t0_;
+};
+
 // The same counters for every case of the detect comparison (the CSV
 // reporter needs one set of columns).
-void set_counters(benchmark::State& state, const DetectStats& total, uint64_t allocations) {
+void set_counters(benchmark::State& state, const DetectStats& total, uint64_t allocations, FrameTimes& times) {
+  state.counters["frame_median_us"] = times.median();
   const double frames = double(state.iterations());
   state.counters["pair_tests"] = double(total.pair_tests) / frames;
   state.counters["box_tests"] = double(total.box_tests) / frames;
@@ -229,6 +252,7 @@ void BM_Detect(benchmark::State& state) {
   }
   DetectStats total;
   uint64_t allocations = 0;
+  FrameTimes times(state);
   for (auto _ : state) {
     state.PauseTiming();
     motion.at(f);
@@ -236,9 +260,11 @@ void BM_Detect(benchmark::State& state) {
     ++f;
     const uint64_t before = g_allocations.load();
     state.ResumeTiming();
+    times.start();
     set_poses();
     world.set_camera(camera);
     const DetectStats d = world.detect(contacts);
+    times.stop();
     state.PauseTiming();
     allocations += g_allocations.load() - before;
     total.pair_tests += d.pair_tests;
@@ -247,7 +273,7 @@ void BM_Detect(benchmark::State& state) {
     total.area_computations += d.area_computations;
     state.ResumeTiming();
   }
-  set_counters(state, total, allocations);
+  set_counters(state, total, allocations, times);
 }
 // Fixed frame counts, so every case (and FCL) sees exactly the same poses.
 constexpr int kFrames10k = 300, kFrames100k = 40;
@@ -320,10 +346,12 @@ void BM_FclDynamicAabb(benchmark::State& state) {
     }
     manager.update();
   }
+  FrameTimes times(state);
   for (auto _ : state) {
     state.PauseTiming();
     motion.at(f++);
     state.ResumeTiming();
+    times.start();
     for (size_t i = 0; i < objects.size(); ++i) {
       objects[i]->setTransform(to_fcl(motion.now[i]));
       objects[i]->computeAABB();
@@ -332,10 +360,11 @@ void BM_FclDynamicAabb(benchmark::State& state) {
     manager.update();
     manager.collide(&hits, exact_pair);
     allocations += g_allocations.load() - before;
+    times.stop();
   }
   DetectStats total;
   total.contacts = hits;
-  set_counters(state, total, allocations);
+  set_counters(state, total, allocations, times);
 }
 BENCHMARK(BM_FclDynamicAabb)->ArgName("objects")->Arg(10'000)->Iterations(kFrames10k)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_FclDynamicAabb)->ArgName("objects")->Arg(100'000)->Iterations(kFrames100k)->Unit(benchmark::kMicrosecond);
@@ -351,15 +380,18 @@ void BM_LegacyStep(benchmark::State& state) {
   }
   DetectStats total;
   uint64_t allocations = 0;
+  FrameTimes times(state);
   for (auto _ : state) {
     collisions.clear();
+    times.start();
     const uint64_t before = g_allocations.load();
     const FrameStats s = world.step(collisions);
     allocations += g_allocations.load() - before;
+    times.stop();
     total.pair_tests += s.pair_tests, total.box_tests += s.box_tests, total.contacts += s.collisions;
     total.area_computations += s.area_refreshes;
   }
-  set_counters(state, total, allocations);
+  set_counters(state, total, allocations, times);
 }
 BENCHMARK(BM_LegacyStep)->ArgName("objects")->Arg(10'000)->Iterations(kFrames10k)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_LegacyStep)->ArgName("objects")->Arg(100'000)->Iterations(kFrames100k)->Unit(benchmark::kMicrosecond);
