@@ -198,7 +198,9 @@ class FrameTimes {
  public:
   explicit FrameTimes(const benchmark::State& state) { us_.reserve(size_t(state.max_iterations)); }
   void start() { t0_ = std::chrono::steady_clock::now(); }
-  void stop() { us_.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0_).count()); }
+  void stop() {
+    us_.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0_).count());
+  }
   double median() {
     if (us_.empty()) return 0;
     std::nth_element(us_.begin(), us_.begin() + ptrdiff_t(us_.size() / 2), us_.end());
