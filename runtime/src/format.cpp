@@ -8,7 +8,6 @@
 #include <algorithm>
 #include <atomic>
 #include <cassert>
-#include <exception>
 #include <future>
 #include <memory>
 #include <new>
@@ -100,57 +99,50 @@ bool split_in_jobs(size_t raw) { return zstd_has_threads() && job_count(raw) > 1
 // zstd's `threads` workers, its jobs equal so that the threads end together.
 // Every frame is a function of its level's bytes only: the same for every
 // `threads`.
-std::vector<std::vector<uint8_t>> compress_levels(const OctreeMasks& masks, int level, int threads) {
+std::vector<std::vector<uint8_t>> compress_levels(ZSTD_CCtx* cctx, const OctreeMasks& masks, int level,
+                                                  int threads) {
   const int depth = masks.depth();
   std::vector<std::vector<uint8_t>> frames(depth);
-  auto compress = [&](ZSTD_CCtx* cctx, int d) {
+  auto compress = [&](ZSTD_CCtx* c, int d) {
     const std::vector<uint8_t>& raw = masks.masks[d];
-    std::vector<uint8_t> frame = zstd_frame(cctx, raw, level, threads);
+    std::vector<uint8_t> frame = zstd_frame(c, raw, level, threads);
     if (frame.size() < raw.size()) frames[d] = std::move(frame);
-  };
-  auto new_cctx = [] {
-    CCtxPtr cctx(ZSTD_createCCtx(), ZSTD_freeCCtx);
-    if (!cctx) throw std::bad_alloc();
-    return cctx;
   };
   std::vector<int> split, single;
   for (int d = 0; d < depth; ++d) (split_in_jobs(masks.masks[d].size()) ? split : single).push_back(d);
   std::stable_sort(single.begin(), single.end(),
                    [&](int a, int b) { return masks.masks[a].size() > masks.masks[b].size(); });
-  CCtxPtr cctx = new_cctx();
   std::atomic<size_t> next{0};
   auto take_singles = [&](ZSTD_CCtx* c) {
     for (size_t i; (i = next.fetch_add(1)) < single.size();) compress(c, single[i]);
   };
-  const size_t helpers = single.empty() ? 0 : std::min(size_t(threads - 1), single.size() - 1);
-  // Helpers write into `frames`: an exception leaves only after they stop.
-  std::vector<std::future<void>> running;
-  std::exception_ptr failed;
-  try {
-    for (size_t h = 0; h < helpers; ++h) {
-      try {
-        running.push_back(std::async(std::launch::async, [&] { take_singles(new_cctx().get()); }));
-      } catch (const std::system_error&) {
-        break;  // no thread to be had: go on with those running
-      }
+  // The futures of std::async wait for their thread when destroyed, so an
+  // exception leaves only after every helper has stopped writing `frames`.
+  std::vector<std::future<void>> helpers;
+  for (size_t h = 0; h + 1 < std::min(size_t(threads), single.size()); ++h) {
+    try {
+      helpers.push_back(std::async(std::launch::async, [&] {
+        CCtxPtr own(ZSTD_createCCtx(), ZSTD_freeCCtx);
+        if (!own) throw std::bad_alloc();
+        take_singles(own.get());
+      }));
+    } catch (const std::system_error&) {
+      break;  // no thread to be had: go on with those running
     }
-    take_singles(cctx.get());
-  } catch (...) {
-    failed = std::current_exception();
-    next = single.size();
   }
-  for (std::future<void>& f : running) try {
-      f.get();
-    } catch (...) {
-      if (!failed) failed = std::current_exception();
-    }
-  if (failed) std::rethrow_exception(failed);
-  for (int d : split) compress(cctx.get(), d);
+  try {
+    take_singles(cctx);
+  } catch (...) {
+    next = single.size();  // the helpers take nothing more
+    throw;
+  }
+  for (std::future<void>& f : helpers) f.get();  // a helper's exception, if any
+  for (int d : split) compress(cctx, d);
   return frames;
 }
 
-flatbuffers::Offset<fb::Tree> encode_tree(flatbuffers::FlatBufferBuilder& fbb, const TreeToEncode& tree,
-                                          int threads) {
+flatbuffers::Offset<fb::Tree> encode_tree(flatbuffers::FlatBufferBuilder& fbb, ZSTD_CCtx* cctx,
+                                          const TreeToEncode& tree, int threads) {
   const OctreeMasks& masks = tree.masks;
   const int depth = masks.depth();
   assert(depth == tree.options.depth && depth >= 1 && depth <= kMaxDepth);
@@ -160,7 +152,7 @@ flatbuffers::Offset<fb::Tree> encode_tree(flatbuffers::FlatBufferBuilder& fbb, c
 
   std::vector<std::vector<uint8_t>> frames;
   if (tree.options.compression == Compression::zstd)
-    frames = compress_levels(masks, tree.options.compression_level, threads);
+    frames = compress_levels(cctx, masks, tree.options.compression_level, threads);
   std::vector<flatbuffers::Offset<fb::Level>> levels;
   levels.push_back(fb::CreateLevel(fbb, /*box_count=*/1, /*raw_size=*/0, fb::Compression::None,
                                    fbb.CreateVector(std::vector<uint8_t>{})));
@@ -199,9 +191,11 @@ std::vector<uint8_t> encode_file(std::span<const TreeToEncode> trees, const std:
   // not depend on the values.
   flatbuffers::FlatBufferBuilder fbb(4096);
   fbb.ForceDefaults(true);
+  CCtxPtr cctx(ZSTD_createCCtx(), ZSTD_freeCCtx);
+  if (!cctx) throw std::bad_alloc();
   std::vector<flatbuffers::Offset<fb::Tree>> offsets;
   offsets.reserve(trees.size());
-  for (const TreeToEncode& t : trees) offsets.push_back(encode_tree(fbb, t, threads));
+  for (const TreeToEncode& t : trees) offsets.push_back(encode_tree(fbb, cctx.get(), t, threads));
   const auto trees_offset = fbb.CreateVector(offsets);
   const auto version = fbb.CreateString(baker_version);
   fb::FinishSizePrefixedFileBuffer(fbb, fb::CreateFile(fbb, kFormatVersion, version, trees_offset));
