@@ -786,9 +786,14 @@ void CollisionWorld::collect_pairs() {
     pair_room_.resize(std::max<size_t>(pairs_.capacity(), 256));
   spilled_pairs_.clear();
   PairCollector collector(pair_room_, spilled_pairs_);
-  run_parallel(tree_.scan_parts(), 1, range_task([&](size_t b, size_t e) {
-                 for (size_t k = b; k < e; ++k) tree_.scan_part(k, boxes_, collector);
-               }));
+  const auto scan = [&](size_t b, size_t e) {
+    for (size_t k = b; k < e; ++k) tree_.scan_part(k, boxes_, collector);
+  };
+  const size_t parts = tree_.scan_parts();
+  if (parts < kParallelScanParts)  // see the declaration
+    scan(0, parts);
+  else
+    run_parallel(parts, 1, range_task(scan));
   pairs_.assign(pair_room_.begin(), pair_room_.begin() + ptrdiff_t(collector.filled()));
   pairs_.insert(pairs_.end(), spilled_pairs_.begin(), spilled_pairs_.end());
   tree_.finish_pairs(boxes_, pairs_);

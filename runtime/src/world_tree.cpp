@@ -327,7 +327,10 @@ void WorldTree::update_cells(std::span<const uint32_t> ids, std::span<const Cell
       ++i;
     });
   }
-  // 3. The cells, in parts of disjoint cells; 4. each object's entry.
+  // 3. The cells, in parts of disjoint cells (one part for a batch that
+  // steps 1 and 4 run inline: handing out the parts would cost more than the
+  // few moves); 4. each object's entry.
+  if (n <= kMoveGrain) parts = 1;
   for_ranges(parallel, parts, 1, [&](size_t b, size_t e) {
     for (size_t p = b; p < e; ++p) apply_moves(ids, p, parts);
   });

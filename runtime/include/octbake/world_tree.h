@@ -92,7 +92,8 @@ class OCTBAKE_API WorldTree {
   // parallel: each object works out the cells it leaves and enters (looked
   // up, not yet changed); the cells new to the table are made, in k order;
   // then the cells take their arrivals and departures in `parts` groups of
-  // disjoint cells (a power of two; 1 when running inline), and each object
+  // disjoint cells (a power of two; 1 when running inline; a batch of at
+  // most 64 moves uses 1: handing out parts would cost more), and each object
   // its new cell list; last the cells left empty are freed, in k order.
   // Objects that are new, go to or from overflow, or span more than
   // kFastCells cells take the one-by-one path, in k order. The cells'
