@@ -12,9 +12,9 @@ namespace octbake {
 namespace {
 
 TEST(CollisionWorldThreads, ParallelDetectEqualsOneThread) {
-  const uint64_t one = test::crowd_hash(1500, 6, 1, false);
-  EXPECT_EQ(test::crowd_hash(1500, 6, 3, true), one);
-  EXPECT_EQ(test::crowd_hash(1500, 6, 3, false), one);
+  const uint64_t one = test::crowd_hash(4500, 6, 1, false);
+  EXPECT_EQ(test::crowd_hash(4500, 6, 3, true), one);
+  EXPECT_EQ(test::crowd_hash(4500, 6, 3, false), one);
 }
 
 // The WorldTree's batch on a 3-thread pool, with enough objects changing

@@ -11,9 +11,9 @@ namespace {
 using test::Backwards;
 using test::kWork;
 
-// 3000 objects: every parallel part (poses, cell checks, pair scan, depths)
+// 4500 objects: every parallel part (poses, cell checks, pair scan, depths)
 // is split into several chunks.
-constexpr int kCrowd = 3000;
+constexpr int kCrowd = 4500;
 
 TEST(CollisionWorldBatch, SetPosesAndThreadsGiveTheSetPoseLoopsResults) {
   const int frames = 2 + 2 * kWork;

@@ -4,9 +4,12 @@
 // those depths equal to choose_depths over freshly computed pixel areas.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cstring>
 #include <map>
 #include <set>
+#include <thread>
 
 #include "collision_world_util.h"
 
@@ -251,6 +254,43 @@ TEST(CollisionWorldOracle, ThreadPoolCoversEveryItemOnce) {
       for (size_t i = 0; i < count; ++i) ASSERT_EQ(seen[i].load(), 1) << threads << " threads, item " << i;
     }
   }
+}
+
+// While its worker sleeps, a job of fewer than kWakeChunks chunks runs on
+// the caller alone (waking the worker would cost more); a woken worker would
+// take one of these 2 ms chunks. The worker falls asleep 50 µs after a job,
+// so a 10 ms pause lets it; a loaded machine may delay that, hence tries.
+TEST(CollisionWorldOracle, ThreadPoolRunsSmallJobsOnTheCallerWhileWorkersSleep) {
+  ThreadPool pool(2);
+  const size_t chunks = ThreadPool::kWakeChunks - 1;
+  struct Ctx {
+    std::vector<std::thread::id> ran_on;
+  } ctx{std::vector<std::thread::id>(chunks)};
+  const RangeTask task{[](const void* c, size_t b, size_t e) {
+                         const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(2);
+                         while (std::chrono::steady_clock::now() < until) {
+                         }
+                         for (size_t i = b; i < e; ++i)
+                           const_cast<Ctx*>(static_cast<const Ctx*>(c))->ran_on[i] = std::this_thread::get_id();
+                       },
+                       &ctx};
+  bool all_on_caller = false;
+  for (int attempt = 0; attempt < 50 && !all_on_caller; ++attempt) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    pool.parallel_for(chunks, 1, task);
+    all_on_caller = std::all_of(ctx.ran_on.begin(), ctx.ran_on.end(),
+                                [](std::thread::id id) { return id == std::this_thread::get_id(); });
+  }
+  EXPECT_TRUE(all_on_caller);
+  // A busy pool still splits the same job: the worker joins within tries.
+  bool split = false;
+  for (int attempt = 0; attempt < 50 && !split; ++attempt) {
+    pool.parallel_for(64, 1, {[](const void*, size_t, size_t) {}, nullptr});  // wakes the worker (64 chunks)
+    pool.parallel_for(chunks, 1, task);
+    split = std::any_of(ctx.ran_on.begin(), ctx.ran_on.end(),
+                        [](std::thread::id id) { return id != std::this_thread::get_id(); });
+  }
+  EXPECT_TRUE(split);
 }
 
 }  // namespace

@@ -167,8 +167,8 @@ inline uint64_t crowd_hash(int n, int frames, int threads, bool batch, Executor*
     for (const ObjectHandle& h : handles) mix(world.bounds(h));
   }
   EXPECT_GT(total_contacts, uint64_t(frames));  // a crowd that touches
-  // and whose pair scan goes parallel on threads (it runs inline on few parts)
-  EXPECT_GE(world.world_tree().scan_parts(), CollisionWorld::kParallelScanParts);
+  // and whose pair scan goes parallel on threads (it runs inline in small worlds)
+  EXPECT_GE(world.size(), CollisionWorld::kParallelScanObjects);
   return hash;
 }
 
