@@ -12,6 +12,7 @@
 // with its fixed camera (BM_LegacyStep, tests/bench/legacy_world.h).
 // Heap allocations per timed frame are counted by replacing operator new;
 // frame_median_us is the median timed frame (compare thread counts by it).
+// BM_PoolJob: the cost of one job on the built-in thread pool (see there).
 //
 // Run: build with -DOCTBAKE_BENCH=ON, then
 //   ./build/tests/bench_world --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
@@ -30,6 +31,7 @@
 #include <memory>
 #include <new>
 #include <random>
+#include <thread>
 #include <vector>
 
 #include "legacy_world.h"
@@ -469,6 +471,39 @@ void BM_OverlapBox(benchmark::State& state) {
 BENCHMARK(BM_OverlapBox)
     ->ArgsProduct({{10'000, 100'000}, {1, 0}})
     ->ArgNames({"objects", "scan"})
+    ->Unit(benchmark::kMicrosecond);
+
+// One job on the built-in pool: `chunks` chunks of 2 µs of busy work, after
+// a pause of `gap_us` (1000: the worker has gone to sleep; 0: it is still
+// spinning from the job before). threads:1 is the serial time. Shows what a
+// fork costs when the worker must be woken, and that a job under
+// ThreadPool::kWakeChunks then stays on the caller.
+void BM_PoolJob(benchmark::State& state) {
+  ThreadPool pool(int(state.range(0)));
+  const auto gap = std::chrono::microseconds(state.range(1));
+  const size_t chunks = size_t(state.range(2));
+  const RangeTask work{[](const void*, size_t b, size_t e) {
+                         const auto until = std::chrono::steady_clock::now() + std::chrono::microseconds(2 * (e - b));
+                         while (std::chrono::steady_clock::now() < until) {
+                         }
+                       },
+                       nullptr};
+  FrameTimes times(state);
+  for (auto _ : state) {
+    if (gap.count() > 0) std::this_thread::sleep_for(gap);
+    const auto t0 = std::chrono::steady_clock::now();
+    times.start();
+    pool.parallel_for(chunks, 1, work);
+    times.stop();
+    state.SetIterationTime(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
+  state.counters["job_median_us"] = times.median();
+}
+BENCHMARK(BM_PoolJob)
+    ->ArgsProduct({{1, 2}, {0, 1000}, {2, 3, 4, 8}})
+    ->ArgNames({"threads", "gap_us", "chunks"})
+    ->UseManualTime()
+    ->Iterations(2000)
     ->Unit(benchmark::kMicrosecond);
 
 }  // namespace

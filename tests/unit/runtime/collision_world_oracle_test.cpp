@@ -257,15 +257,15 @@ TEST(CollisionWorldOracle, ThreadPoolCoversEveryItemOnce) {
 }
 
 // While its worker sleeps, a job of fewer than kWakeChunks chunks runs on
-// the caller alone (waking the worker would cost more); a woken worker would
-// take one of these 2 ms chunks. The worker falls asleep 50 µs after a job,
-// so a 10 ms pause lets it; a loaded machine may delay that, hence tries.
-TEST(CollisionWorldOracle, ThreadPoolRunsSmallJobsOnTheCallerWhileWorkersSleep) {
+// the caller alone (waking the worker would cost more); a larger job wakes
+// it. Chunks are 2 ms of busy work, so a woken worker takes one. The worker
+// falls asleep 50 µs after a job, so a 10 ms pause lets it; a loaded machine
+// may delay either, hence tries.
+TEST(CollisionWorldOracle, ThreadPoolWakesItsWorkerOnlyForJobsOfSeveralChunks) {
   ThreadPool pool(2);
-  const size_t chunks = ThreadPool::kWakeChunks - 1;
   struct Ctx {
     std::vector<std::thread::id> ran_on;
-  } ctx{std::vector<std::thread::id>(chunks)};
+  };
   const RangeTask task{[](const void* c, size_t b, size_t e) {
                          const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(2);
                          while (std::chrono::steady_clock::now() < until) {
@@ -273,24 +273,21 @@ TEST(CollisionWorldOracle, ThreadPoolRunsSmallJobsOnTheCallerWhileWorkersSleep) 
                          for (size_t i = b; i < e; ++i)
                            const_cast<Ctx*>(static_cast<const Ctx*>(c))->ran_on[i] = std::this_thread::get_id();
                        },
-                       &ctx};
-  bool all_on_caller = false;
-  for (int attempt = 0; attempt < 50 && !all_on_caller; ++attempt) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    pool.parallel_for(chunks, 1, task);
-    all_on_caller = std::all_of(ctx.ran_on.begin(), ctx.ran_on.end(),
-                                [](std::thread::id id) { return id == std::this_thread::get_id(); });
-  }
-  EXPECT_TRUE(all_on_caller);
-  // A busy pool still splits the same job: the worker joins within tries.
-  bool split = false;
-  for (int attempt = 0; attempt < 50 && !split; ++attempt) {
-    pool.parallel_for(64, 1, {[](const void*, size_t, size_t) {}, nullptr});  // wakes the worker (64 chunks)
-    pool.parallel_for(chunks, 1, task);
-    split = std::any_of(ctx.ran_on.begin(), ctx.ran_on.end(),
-                        [](std::thread::id id) { return id != std::this_thread::get_id(); });
-  }
-  EXPECT_TRUE(split);
+                       nullptr};
+  // Does some try of a `chunks` job after a pause run (only / partly) on the caller?
+  const auto some_try = [&](size_t chunks, bool only_caller) {
+    Ctx ctx{std::vector<std::thread::id>(chunks)};
+    for (int attempt = 0; attempt < 50; ++attempt) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+      pool.parallel_for(chunks, 1, {task.run, &ctx});
+      const bool on_caller = std::all_of(ctx.ran_on.begin(), ctx.ran_on.end(),
+                                         [](std::thread::id id) { return id == std::this_thread::get_id(); });
+      if (on_caller == only_caller) return true;
+    }
+    return false;
+  };
+  EXPECT_TRUE(some_try(ThreadPool::kWakeChunks - 1, true));
+  EXPECT_TRUE(some_try(2 * ThreadPool::kWakeChunks, false));
 }
 
 }  // namespace
