@@ -208,7 +208,6 @@ struct ThreadPool::State {
   std::atomic<uint64_t> job{0};        // bumped when a job opens
   std::atomic<bool> open{false};
   std::atomic<int> inside{0};          // workers that joined the current job
-  std::atomic<int> sleeping{0};        // workers waiting on `work`
   std::atomic<bool> stop{false};
 
   static void pause() {
@@ -245,9 +244,7 @@ struct ThreadPool::State {
       const auto ready = [&] { return stop.load() || job.load() != seen; };
       if (!spin(ready)) {
         std::unique_lock lock(mutex);
-        sleeping.fetch_add(1);
         work.wait(lock, ready);
-        sleeping.fetch_sub(1);
       }
       if (stop.load()) return;
       seen = job.load();
@@ -277,15 +274,12 @@ int ThreadPool::threads() const { return int(state_->workers.size()) + 1; }
 void ThreadPool::parallel_for(size_t count, size_t grain, RangeTask task) {
   State& s = *state_;
   grain = std::max<size_t>(grain, 1);
-  const size_t chunks = (count + grain - 1) / grain;
-  // A stale count only misjudges the cost: any split gives the same results.
-  if (s.workers.empty() || chunks <= 1 || (chunks < kWakeChunks && s.sleeping.load() == int(s.workers.size())))
-    return run_inline(count, task);
+  if (s.workers.empty() || count <= grain) return run_inline(count, task);
   s.task = task;
   s.count = count;
   s.grain = grain;
   s.next.store(0);
-  s.chunks_left.store(chunks);
+  s.chunks_left.store((count + grain - 1) / grain);
   s.open.store(true);
   {
     std::lock_guard lock(s.mutex);  // a worker between its check and its wait sees it

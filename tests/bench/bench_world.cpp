@@ -476,8 +476,8 @@ BENCHMARK(BM_OverlapBox)
 // One job on the built-in pool: `chunks` chunks of 2 µs of busy work, after
 // a pause of `gap_us` (1000: the worker has gone to sleep; 0: it is still
 // spinning from the job before). threads:1 is the serial time. Shows what a
-// fork costs when the worker must be woken, and that a job under
-// ThreadPool::kWakeChunks then stays on the caller.
+// fork costs, with the worker awake and when it must be woken: why small
+// worlds keep their pair scan and cell moves on the calling thread.
 void BM_PoolJob(benchmark::State& state) {
   ThreadPool pool(int(state.range(0)));
   const auto gap = std::chrono::microseconds(state.range(1));

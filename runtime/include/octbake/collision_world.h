@@ -98,10 +98,7 @@ class OCTBAKE_API Executor {
 
 // The built-in executor: `threads - 1` worker threads plus the caller. Used by
 // CollisionWorld when settings.threads > 1 and no executor is given. Workers
-// sleep between jobs; a job of fewer than kWakeChunks chunks runs on the
-// caller alone while every worker sleeps (waking one costs the caller ~6 µs
-// and the worker arrives ~16 µs later, measured on a 2-core VM: more than
-// such a job saves). parallel_for does not allocate.
+// sleep between jobs; parallel_for does not allocate.
 class OCTBAKE_API ThreadPool final : public Executor {
  public:
   explicit ThreadPool(int threads);
@@ -110,7 +107,6 @@ class OCTBAKE_API ThreadPool final : public Executor {
   ThreadPool& operator=(const ThreadPool&) = delete;
   void parallel_for(size_t count, size_t grain, RangeTask task) override;
   int threads() const;
-  static constexpr size_t kWakeChunks = 4;
 
  private:
   struct State;

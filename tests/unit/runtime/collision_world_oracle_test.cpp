@@ -4,12 +4,9 @@
 // those depths equal to choose_depths over freshly computed pixel areas.
 #include <gtest/gtest.h>
 
-#include <algorithm>
-#include <chrono>
 #include <cstring>
 #include <map>
 #include <set>
-#include <thread>
 
 #include "collision_world_util.h"
 
@@ -254,40 +251,6 @@ TEST(CollisionWorldOracle, ThreadPoolCoversEveryItemOnce) {
       for (size_t i = 0; i < count; ++i) ASSERT_EQ(seen[i].load(), 1) << threads << " threads, item " << i;
     }
   }
-}
-
-// While its worker sleeps, a job of fewer than kWakeChunks chunks runs on
-// the caller alone (waking the worker would cost more); a larger job wakes
-// it. Chunks are 2 ms of busy work, so a woken worker takes one. The worker
-// falls asleep 50 µs after a job, so a 10 ms pause lets it; a loaded machine
-// may delay either, hence tries.
-TEST(CollisionWorldOracle, ThreadPoolWakesItsWorkerOnlyForJobsOfSeveralChunks) {
-  ThreadPool pool(2);
-  struct Ctx {
-    std::vector<std::thread::id> ran_on;
-  };
-  const RangeTask task{[](const void* c, size_t b, size_t e) {
-                         const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(2);
-                         while (std::chrono::steady_clock::now() < until) {
-                         }
-                         for (size_t i = b; i < e; ++i)
-                           const_cast<Ctx*>(static_cast<const Ctx*>(c))->ran_on[i] = std::this_thread::get_id();
-                       },
-                       nullptr};
-  // Does some try of a `chunks` job after a pause run (only / partly) on the caller?
-  const auto some_try = [&](size_t chunks, bool only_caller) {
-    Ctx ctx{std::vector<std::thread::id>(chunks)};
-    for (int attempt = 0; attempt < 50; ++attempt) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
-      pool.parallel_for(chunks, 1, {task.run, &ctx});
-      const bool on_caller = std::all_of(ctx.ran_on.begin(), ctx.ran_on.end(),
-                                         [](std::thread::id id) { return id == std::this_thread::get_id(); });
-      if (on_caller == only_caller) return true;
-    }
-    return false;
-  };
-  EXPECT_TRUE(some_try(ThreadPool::kWakeChunks - 1, true));
-  EXPECT_TRUE(some_try(2 * ThreadPool::kWakeChunks, false));
 }
 
 }  // namespace
