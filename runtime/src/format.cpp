@@ -52,7 +52,10 @@ size_t job_count(size_t raw) {
   return std::max(std::min(fit, kMostJobs), (raw + kMaxJob - 1) / kMaxJob);
 }
 
-size_t job_size(size_t raw) { return std::max((raw + job_count(raw) - 1) / job_count(raw), kMinJob); }
+size_t job_size(size_t raw) {
+  const size_t count = job_count(raw);
+  return std::max((raw + count - 1) / count, kMinJob);
+}
 
 // A libzstd built without threads: single-threaded frames for every level,
 // still the same bytes for every thread count.
