@@ -445,6 +445,11 @@ bool same_pose(const Pose& a, const Pose& b) { return same_frame_of(a, b) && sam
   place_box(i);
   if (settings_.area_refresh == AreaRefresh::on_demand) s.area_epoch = 0;
   if (s.tree_dirty) return false;
+  // Most moves stay in the same WorldTree cells, whose entry then stays
+  // right: only a change of cells is listed for commit_poses (reading the
+  // entry here, while the slot is hot, spares commit_poses a pass over every
+  // mover).
+  if (!tree_.needs_update(i, tree_.cell_range(boxes_[i]))) return false;
   // A live slot that is not dirty was committed, so it is not listed.
   s.tree_dirty = s.listed = true;
   return true;
@@ -471,35 +476,41 @@ Status CollisionWorld::set_poses(std::span<const ObjectHandle> handles, std::spa
                " poses");
   if (handles.size() > std::numeric_limits<uint32_t>::max()) return bad("set_poses: more than 2^32 - 1 items");
   const size_t n = handles.size();
-  if (claim_.size() < slots_.size()) claim_.resize(slots_.size());  // grows with the world only
-  std::atomic<bool> refused{false};
-  // 1. Every item checked as set_pose would; each claims its slot, the last
-  //    claim winning (plain stores: relaxed atomics).
+  std::atomic<bool> refused{false}, unordered{false};
+  // 1. Every item checked as set_pose would, and whether the slots ascend:
+  //    then none is named twice (handles in creation order, the usual case,
+  //    need no duplicate pass).
   const auto check_items = [&](size_t b, size_t e) {
-    bool ok = true;
+    bool ok = true, ascending = true;
     for (size_t k = b; k < e; ++k) {
       const ObjectHandle h = handles[k];
-      if (!valid(h)) {
-        ok = false;
-        continue;
-      }
+      ascending &= k == 0 || handles[k - 1].slot < h.slot;
       // A pose bitwise equal to the stored one passed pose_ok when it was
       // set: no need to read the stored pose (a second cache line) here.
-      if (!pose_ok(poses[k])) ok = false;
-      std::atomic_ref<uint32_t>(claim_[h.slot]).store(uint32_t(k), std::memory_order_relaxed);
+      if (!valid(h) || !pose_ok(poses[k])) ok = false;
     }
     if (!ok) refused.store(true, std::memory_order_relaxed);
+    if (!ascending) unordered.store(true, std::memory_order_relaxed);
   };
   run_parallel(n, kPoseGrain, range_task(check_items));
-  // 2. A slot claimed by another item is named twice.
-  const auto check_claims = [&](size_t b, size_t e) {
-    for (size_t k = b; k < e; ++k)
-      if (std::atomic_ref<uint32_t>(claim_[handles[k].slot]).load(std::memory_order_relaxed) != k) {
-        refused.store(true, std::memory_order_relaxed);
-        return;
-      }
-  };
-  if (!refused.load()) run_parallel(n, kPoseGrain, range_task(check_claims));
+  // 2. Otherwise each item claims its slot, the last claim winning (plain
+  //    stores: relaxed atomics); a slot claimed by another item is named twice.
+  if (!refused.load() && unordered.load()) {
+    if (claim_.size() < slots_.size()) claim_.resize(slots_.size());  // grows with the world only
+    const auto claim = [&](size_t b, size_t e) {
+      for (size_t k = b; k < e; ++k)
+        std::atomic_ref<uint32_t>(claim_[handles[k].slot]).store(uint32_t(k), std::memory_order_relaxed);
+    };
+    const auto check_claims = [&](size_t b, size_t e) {
+      for (size_t k = b; k < e; ++k)
+        if (std::atomic_ref<uint32_t>(claim_[handles[k].slot]).load(std::memory_order_relaxed) != k) {
+          refused.store(true, std::memory_order_relaxed);
+          return;
+        }
+    };
+    run_parallel(n, kPoseGrain, range_task(claim));
+    run_parallel(n, kPoseGrain, range_task(check_claims));
+  }
   if (refused.load()) return first_pose_error(handles, poses);
   // 3. The moves, each on its own slot, in blocks that count their newly
   // dirty; then each block lists those at its offset in dirty_: item order,
@@ -704,9 +715,10 @@ void CollisionWorld::test_pairs(size_t begin, size_t end) {
 }
 
 void CollisionWorld::commit_poses() {
-  // Which dirty objects changed cells, in parallel (dirty_ names each slot
-  // once, see create()); then the WorldTree's batch moves them (in parallel
-  // parts but for the cells new to its table).
+  // Which listed objects still change cells (one may have moved back since
+  // it was listed), in parallel (dirty_ names each slot once, see create());
+  // then the WorldTree's batch moves them (in parallel parts but for the
+  // cells new to its table).
   const size_t n = dirty_.size();
   if (move_flags_.size() < n) move_flags_.resize(n);
   if (ranges_.size() < n) ranges_.resize(n);

@@ -342,7 +342,7 @@ class OCTBAKE_API CollisionWorld {
   struct alignas(64) Slot {
     uint32_t generation = 0;
     bool live = false;
-    bool tree_dirty = false;  // WorldTree not yet moved to `box`
+    bool tree_dirty = false;  // WorldTree entry stale: its cells are not those of `box`
     bool listed = false;      // in dirty_ (also after a destroy, until the next commit)
     int depth = 0;
     Pose pose;

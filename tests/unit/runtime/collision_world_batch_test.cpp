@@ -3,6 +3,10 @@
 // that change nothing.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <numeric>
+#include <random>
+
 #include "collision_world_util.h"
 
 namespace octbake {
@@ -77,6 +81,30 @@ class SetPosesRefusal : public ::testing::Test {
 TEST_F(SetPosesRefusal, DuplicateObjectNamesBothItems) {
   handles_[900] = handles_[17];
   expect_refused("item 900: the same object as item 17");
+}
+
+// Sorted handles skip the duplicate pass, so a duplicate must break the
+// order: here only across the boundary of two parallel chunks (512 items).
+TEST_F(SetPosesRefusal, DuplicateAcrossAChunkBoundary) {
+  handles_[512] = handles_[511];
+  expect_refused("item 512: the same object as item 511");
+}
+
+// Handles in any order are accepted (they take the duplicate pass).
+TEST_F(SetPosesRefusal, ShuffledBatchMovesEveryObject) {
+  std::vector<size_t> order(handles_.size());
+  std::iota(order.begin(), order.end(), size_t{0});
+  std::shuffle(order.begin(), order.end(), std::mt19937(5));
+  std::vector<ObjectHandle> handles;
+  std::vector<Pose> poses;
+  for (size_t k : order) handles.push_back(handles_[k]), poses.push_back(poses_[k]);
+  ASSERT_TRUE(world_->set_poses(handles, poses).ok());
+  for (size_t k = 0; k < handles_.size(); ++k) EXPECT_EQ(world_->pose(handles_[k]).value().position, poses_[k].position);
+  handles[1000] = handles[3];
+  poses[1000].position.y() += 1;
+  const Status st = world_->set_poses(handles, poses);
+  ASSERT_FALSE(st.ok());
+  EXPECT_NE(st.error().message.find("item 1000: the same object as item 3"), std::string::npos) << st.error().message;
 }
 
 TEST_F(SetPosesRefusal, BadPoseNamesTheFirstBadItem) {
