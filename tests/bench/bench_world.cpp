@@ -294,6 +294,89 @@ BENCHMARK(BM_Detect)
     ->Iterations(kFrames100k)
     ->Unit(benchmark::kMicrosecond);
 
+// Two threads against one, paired: two worlds on the same poses, one on one
+// thread and one on two, taking turns in blocks of kPairedBlock frames (which
+// side goes first alternates), so both sides see the same minutes of a shared,
+// noisy host. (BM_Detect runs minutes apart gave the same code one-thread
+// medians from 560 to 1,680 µs at 10k objects: a ratio of two such runs says
+// more about the host than about the code.) The first frame of each block is
+// not counted: the other world has just evicted this one's data from the
+// caches (frames of alternating worlds took 2.5x longer), and BM_Detect's
+// frames are warm. Reports each side's median frame and `speedup`, one
+// thread's median over two threads'; the two worlds' contacts are compared at
+// the end of every block and must be identical.
+constexpr int64_t kPairedBlock = 8;
+void BM_ThreadsPaired(benchmark::State& state) {
+  const Scene scene = make_scene(int(state.range(0)));
+  const LodPolicy policy = LodPolicy(state.range(1));
+  struct Side {
+    std::unique_ptr<CollisionWorld> world;
+    std::vector<ObjectHandle> handles;
+    std::vector<Contact> contacts;
+  };
+  Side sides[2];
+  for (int t = 0; t < 2; ++t) {
+    CollisionSettings settings = collision_settings(scene, policy);
+    settings.threads = t + 1;
+    sides[t].world = std::make_unique<CollisionWorld>(settings);
+    for (const ObjectDesc& o : scene.objects)
+      sides[t].handles.push_back(sides[t].world->create(TreeSource::fixed(o.tree), o.pose).value());
+  }
+  AppMotion motion(scene);
+  const auto frame = [&](Side& side, int64_t f) {
+    (void)side.world->set_poses(side.handles, motion.now);
+    side.world->set_camera(AppMotion::camera(scene, f));
+    side.world->detect(side.contacts);
+  };
+  for (int64_t f = 0; f < kWarmup; ++f) {
+    motion.at(f);
+    for (Side& side : sides) frame(side, f);
+  }
+  std::vector<double> us[2];
+  const auto same = [](const Contact& x, const Contact& y) {
+    return x.a.slot == y.a.slot && x.b.slot == y.b.slot && x.depth_a == y.depth_a && x.depth_b == y.depth_b &&
+           x.box_tests == y.box_tests;
+  };
+  int64_t block = 0;
+  for (auto _ : state) {
+    const int64_t first = kWarmup + block * kPairedBlock;
+    for (int k = 0; k < 2; ++k) {
+      const int t = int((block + k) % 2);
+      for (int64_t f = first; f < first + kPairedBlock; ++f) {
+        motion.at(f);
+        const auto t0 = std::chrono::steady_clock::now();
+        frame(sides[t], f);
+        const double elapsed = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();
+        if (f > first) us[t].push_back(elapsed);
+      }
+    }
+    ++block;
+    if (!std::equal(sides[0].contacts.begin(), sides[0].contacts.end(), sides[1].contacts.begin(),
+                    sides[1].contacts.end(), same)) {
+      state.SkipWithError("one and two threads gave different contacts");
+      return;
+    }
+  }
+  const auto median = [](std::vector<double>& v) {
+    std::nth_element(v.begin(), v.begin() + ptrdiff_t(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  const double one = median(us[0]), two = median(us[1]);
+  state.counters["one_thread_median_us"] = one;
+  state.counters["two_threads_median_us"] = two;
+  state.counters["speedup"] = one / two;
+}
+BENCHMARK(BM_ThreadsPaired)
+    ->ArgsProduct({{10'000}, {int(LodPolicy::screen), int(LodPolicy::fixed)}})
+    ->ArgNames({"objects", "policy"})
+    ->Iterations(kFrames10k / kPairedBlock)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ThreadsPaired)
+    ->ArgsProduct({{100'000}, {int(LodPolicy::screen), int(LodPolicy::fixed)}})
+    ->ArgNames({"objects", "policy"})
+    ->Iterations(kFrames100k / 4)
+    ->Unit(benchmark::kMillisecond);
+
 // FCL on the same poses: a 12-triangle box mesh per tree (the solid trees are
 // exactly their root boxes), OBBRSS BVHs, DynamicAABBTree broadphase.
 using Bvh = fcl::BVHModel<fcl::OBBRSSd>;
