@@ -226,8 +226,10 @@ class OCTBAKE_API CollisionWorld {
   // large: the form for an engine that moves many objects a frame. Refused,
   // changing nothing, when the spans differ in length, an object appears
   // twice, or any item would be refused by set_pose; the error names the
-  // first such item (ErrorCode::invalid_argument). Allocates only to grow
-  // its scratch with the world.
+  // first such item (ErrorCode::invalid_argument). Handles in ascending
+  // slot order (as create() hands them out, without destroys) skip the pass
+  // that looks for an object named twice. Allocates only to grow its scratch
+  // with the world.
   Status set_poses(std::span<const ObjectHandle> handles, std::span<const Pose> poses);
   Result<Pose> pose(ObjectHandle h) const;
 
