@@ -449,7 +449,7 @@ bool same_pose(const Pose& a, const Pose& b) { return same_frame_of(a, b) && sam
   // right: only a change of cells is listed for commit_poses (reading the
   // entry here, while the slot is hot, spares commit_poses a pass over every
   // mover).
-  if (!tree_.needs_update(i, tree_.cell_range(boxes_[i]))) return false;
+  if (!tree_.needs_update(i, boxes_[i])) return false;
   // A live slot that is not dirty was committed, so it is not listed.
   s.tree_dirty = s.listed = true;
   return true;

@@ -184,6 +184,8 @@ void WorldTree::relink(uint32_t id, const Coord& lo, const Coord& hi, bool overf
 
 bool WorldTree::update(uint32_t id, const Aabb& box) { return update_cells(id, cell_range(box)); }
 
+bool WorldTree::needs_update(uint32_t id, const Aabb& box) const { return needs_update(id, cell_range(box)); }
+
 bool WorldTree::update_cells(uint32_t id, const CellRange& r) {
   const bool changed = move_one(id, r);
   drop_empty_cells();
