@@ -271,6 +271,39 @@ TEST(WorldTree, UpdateWithinSameCellsIsNotAChange) {
   EXPECT_FALSE(tree.update(7, {{-5, 2.1, 2.6}, {-4, 2.5, 2.7}}));  // wholly outside, same clamped cell
 }
 
+// needs_update(id, box) predicts update(id, box)'s answer: boxes walking in
+// small steps (mostly within their cells) in and beyond a unit-cell world,
+// jumping now and then, some huge (overflow), new ids too.
+TEST(WorldTree, NeedsUpdatePredictsUpdate) {
+  std::mt19937 rng(41);
+  std::uniform_real_distribution<double> step(-0.15, 0.15), at(-4, 36), unit(0, 1);
+  WorldTree tree({{0, 0, 0}, {32, 32, 32}}, /*depth=*/5);
+  std::vector<Aabb> boxes;
+  int changes = 0, same = 0, overflow = 0;
+  for (int k = 0; k < 6000; ++k) {
+    const uint32_t id = uint32_t(k % 40);
+    if (id >= boxes.size() || k % 53 == 0) {  // new or jumping
+      const Eigen::Vector3d lo(at(rng), at(rng), at(rng));
+      const double s = k % 7 == 0 ? 12 : 2 * unit(rng);  // 12^3 cells: over kMaxCells
+      const Aabb box{lo, lo + Eigen::Vector3d(s, s, s)};
+      if (id >= boxes.size()) boxes.push_back(box); else boxes[id] = box;
+    } else {
+      const Eigen::Vector3d d(step(rng), step(rng), step(rng));
+      boxes[id] = {boxes[id].min + d, boxes[id].max + d};
+    }
+    const Aabb& box = boxes[id];
+    const bool predicted = tree.needs_update(id, box);
+    ASSERT_EQ(predicted, tree.needs_update(id, tree.cell_range(box)));
+    ASSERT_EQ(tree.update(id, box), predicted) << k;
+    EXPECT_FALSE(tree.needs_update(id, box));
+    (predicted ? changes : same)++;
+    overflow += tree.in_overflow(id);
+  }
+  EXPECT_GT(changes, 500);  // both answers occur, and overflow
+  EXPECT_GT(same, 500);
+  EXPECT_GT(overflow, 0);
+}
+
 TEST(WorldTree, OutsideObjectsClampToBorderCells) {
   WorldTree tree({{0, 0, 0}, {8, 8, 8}}, /*depth=*/3);
   tree.update(0, {{1, 1, 1}, {1.5, 1.5, 1.5}});
