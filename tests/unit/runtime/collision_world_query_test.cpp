@@ -317,8 +317,8 @@ TEST(CollisionWorldQuery, WorldTreeOverlapsEqualScanOverEveryObject) {
 // Moves that keep an object's WorldTree cells are not listed for the next
 // commit (the entry stays right); moves that change them, or leave and come
 // back before the commit, are. Either way the queries and detect()'s candidate
-// pairs stay exact: the tree's overlaps equal the scan's, and the candidate
-// pairs equal the brute-force count of overlapping world AABBs.
+// pairs stay exact: the tree's overlaps and ray casts equal the scans', and
+// the candidate pairs equal the brute-force count of overlapping world AABBs.
 TEST(CollisionWorldQuery, MovesWithinTheirCellsKeepQueriesAndPairsExact) {
   std::mt19937 rng(23);
   const std::vector<ObjectTree> trees = test::random_trees(rng, 4);
@@ -348,6 +348,11 @@ TEST(CollisionWorldQuery, MovesWithinTheirCellsKeepQueriesAndPairsExact) {
         ASSERT_TRUE(s.world->overlap_box_scan({c.array() - r, c.array() + r}, want).ok());
         ASSERT_EQ(got, want) << "trial " << trial << " frame " << frame;
         found += got.size(), ++queries;
+        const Eigen::Vector3d origin = s.offset + test::random_point(rng, -150, 150) * s.scale;
+        const Eigen::Vector3d dir = c - origin;
+        if (dir.squaredNorm() == 0) continue;
+        expect_same(s.world->ray_cast(origin, dir, INFINITY), s.world->ray_cast_scan(origin, dir, INFINITY), "ray");
+        ASSERT_FALSE(testing::Test::HasFailure()) << "trial " << trial << " frame " << frame;
       }
       const DetectStats d = s.world->detect(contacts);
       uint64_t overlapping = 0;
