@@ -298,7 +298,7 @@ BENCHMARK(BM_Detect)
 // thread and one on two, taking turns in blocks of kPairedBlock frames (which
 // side goes first alternates), so both sides see the same minutes of a shared,
 // noisy host. (BM_Detect runs minutes apart gave the same code one-thread
-// medians from 560 to 1,680 µs at 10k objects: a ratio of two such runs says
+// medians from 520 to 2,020 µs at 10k objects: a ratio of two such runs says
 // more about the host than about the code.) The first frame of each block is
 // not counted: the other world has just evicted this one's data from the
 // caches (frames of alternating worlds took 2.5x longer), and BM_Detect's
