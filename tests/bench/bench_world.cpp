@@ -301,7 +301,7 @@ BENCHMARK(BM_Detect)
 // medians from 520 to 2,020 µs at 10k objects: a ratio of two such runs says
 // more about the host than about the code.) The first frame of each block is
 // not counted: the other world has just evicted this one's data from the
-// caches (frames of alternating worlds took 2.5x longer), and BM_Detect's
+// caches (frames of worlds alternating every frame took 1.8-2.7x longer), and BM_Detect's
 // frames are warm. Reports each side's median frame and `speedup`, one
 // thread's median over two threads'; the two worlds' contacts are compared at
 // the end of every block and must be identical.
