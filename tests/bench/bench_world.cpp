@@ -301,10 +301,10 @@ BENCHMARK(BM_Detect)
 // medians from 520 to 2,020 µs at 10k objects: a ratio of two such runs says
 // more about the host than about the code.) The first frame of each block is
 // not counted: the other world has just evicted this one's data from the
-// caches (frames of worlds alternating every frame took 1.8-2.7x longer), and BM_Detect's
-// frames are warm. Reports each side's median frame and `speedup`, one
-// thread's median over two threads'; the two worlds' contacts are compared at
-// the end of every block and must be identical.
+// caches (frames of worlds alternating every frame took 1.8-2.7x longer),
+// and BM_Detect's frames are warm. Reports each side's median frame and
+// `speedup`, one thread's median over two threads'; the two worlds' contacts
+// are compared at the end of every block and must be identical.
 constexpr int64_t kPairedBlock = 8;
 void BM_ThreadsPaired(benchmark::State& state) {
   const Scene scene = make_scene(int(state.range(0)));
