@@ -239,15 +239,26 @@ TEST(CollisionWorldOracle, ThreadPoolCoversEveryItemOnce) {
   for (int threads : {1, 2, 3, 8}) {
     ThreadPool pool(threads);
     EXPECT_EQ(pool.threads(), threads);
-    for (size_t count : {size_t{0}, size_t{1}, size_t{63}, size_t{64}, size_t{1000}}) {
+    // Fewer chunks than threads (15 items: 3 chunks of 7), shares of one
+    // chunk, uneven shares.
+    for (size_t count : {size_t{0}, size_t{1}, size_t{8}, size_t{15}, size_t{63}, size_t{64}, size_t{1000}}) {
       std::vector<std::atomic<int>> seen(count);
+      std::atomic<int> bad_chunks{0};
       struct Ctx {
         std::vector<std::atomic<int>>* seen;
-      } ctx{&seen};
+        std::atomic<int>* bad_chunks;
+      } ctx{&seen, &bad_chunks};
       pool.parallel_for(count, 7, {[](const void* c, size_t b, size_t e) {
-                                     for (size_t i = b; i < e; ++i) (*static_cast<const Ctx*>(c)->seen)[i]++;
+                                     const Ctx& x = *static_cast<const Ctx*>(c);
+                                     // On workers, whole chunks: from a multiple of the grain, at most
+                                     // a grain long (inline: one call for everything).
+                                     if (b % 7 != 0 || e <= b || e - b > 7) ++*x.bad_chunks;
+                                     for (size_t i = b; i < e; ++i) (*x.seen)[i]++;
                                    },
                                    &ctx});
+      if (threads > 1 && count > 7) {
+        EXPECT_EQ(bad_chunks.load(), 0) << threads << " threads, " << count << " items";
+      }
       for (size_t i = 0; i < count; ++i) ASSERT_EQ(seen[i].load(), 1) << threads << " threads, item " << i;
     }
   }
