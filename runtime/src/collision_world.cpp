@@ -31,7 +31,10 @@ namespace {
 constexpr double kRelativePad = 1e-9;
 // Items per parallel chunk: enough work per chunk to pay for handing it out.
 constexpr size_t kPairGrain = 16;    // pair tests: 0.3-1 µs each on small scenes, more on mixed sizes
-constexpr size_t kPoseGrain = 512;   // set_poses items, commit_poses checks
+constexpr size_t kPoseGrain = 512;   // set_poses items
+// commit_poses' checks: a cell range each (~30 ns); a 10k-object frame lists
+// only ~200 objects, which one chunk of kPoseGrain would leave to one thread.
+constexpr size_t kCellCheckGrain = 64;
 constexpr size_t kDepthGrain = 32;   // depth refreshes (a pixel area each at most)
 // WorldTree cell-move parts on an executor of unknown size: each part reads
 // every move, so few, but enough to balance a few threads.
@@ -758,7 +761,7 @@ void CollisionWorld::commit_poses() {
       if (tree_.needs_update(i, ranges_[k])) move_flags_[k] = kMoved;
     }
   };
-  run_parallel(n, kPoseGrain, range_task(check_cells));
+  run_parallel(n, kCellCheckGrain, range_task(check_cells));
   // The moved ones, in order, to the front (dirty_ is cleared below).
   size_t moved = 0;
   for (size_t k = 0; k < n; ++k)
@@ -775,9 +778,11 @@ void CollisionWorld::commit_poses() {
     }
   } on_world(this);
   // Inline: one pass over the cells; on threads, parts of disjoint cells
-  // (one per pool thread: the parts are even, being hashed by cell slot).
+  // (hashed by cell slot), two per pool thread: a frame's moves load the
+  // parts unevenly, and a thread done with its own then helps with another
+  // (10k objects, 2 threads: ~2% faster frames than one part per thread).
   const size_t parts = settings_.executor ? kCellParts
-                       : pool_ ? std::min(kCellParts, std::bit_ceil(size_t(pool_->threads())))
+                       : pool_ ? std::min(kCellParts, 2 * std::bit_ceil(size_t(pool_->threads())))
                                : 1;
   tree_.update_cells(std::span(dirty_).first(moved), std::span(ranges_).first(moved), on_world, parts);
   dirty_.clear();
