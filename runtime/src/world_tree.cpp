@@ -39,6 +39,9 @@ WorldTree::WorldTree(const Aabb& world, int depth) : world_(world), depth_(depth
 namespace {
 
 uint32_t pack(const std::array<uint16_t, 3>& c) { return uint32_t(c[0]) | (uint32_t(c[1]) << 10) | (uint32_t(c[2]) << 20); }
+std::array<uint16_t, 3> unpack(uint32_t key) {
+  return {uint16_t(key & 1023u), uint16_t((key >> 10) & 1023u), uint16_t((key >> 20) & 1023u)};
+}
 
 // Fibonacci hashing of the packed coordinate into the table.
 size_t home(uint32_t key, size_t mask) { return size_t((key * 0x9E3779B97F4A7C15ull) >> 32) & mask; }
@@ -255,9 +258,10 @@ void WorldTree::plan_move(uint32_t id, const CellRange& r, Move& m) const {
   });
   for_each_cell(r.lo, r.hi, [&](const Coord& c) {
     if (inside(c, e.lo, e.hi)) return;
-    const size_t t = table_find(pack(c));  // the table is not empty: e has cells
+    const uint32_t key = pack(c);
+    const size_t t = table_find(key);  // the table is not empty: e has cells
     if (table_[t] == 0) m.missing |= uint8_t(1u << m.enters);
-    m.enter[m.enters++] = uint32_t(table_[t]);
+    m.enter[m.enters++] = table_[t] != 0 ? uint32_t(table_[t]) : key;
   });
 }
 
@@ -320,14 +324,12 @@ void WorldTree::update_cells(std::span<const uint32_t> ids, std::span<const Cell
     }
     if (m.kind != MoveKind::fast) continue;
     ++reinsertions_;
-    if (m.missing == 0) continue;
-    const Entry& e = entries_[ids[k]];
-    int i = 0;
-    for_each_cell(ranges[k].lo, ranges[k].hi, [&](const Coord& c) {
-      if (inside(c, e.lo, e.hi)) return;
-      if (m.missing & (1u << i)) m.enter[i] = cell_slot(c);
-      ++i;
-    });
+    // In enter order; plan_move kept the missing cells' coordinates, so the
+    // entry (a cache miss per move) is not read again.
+    for (uint32_t rest = m.missing; rest != 0; rest &= rest - 1) {
+      const int i = std::countr_zero(rest);
+      m.enter[i] = cell_slot(unpack(m.enter[i]));
+    }
   }
   // 3. The cells, in parts of disjoint cells (one part for a batch that
   // steps 1 and 4 run inline: handing out the parts would cost more than the

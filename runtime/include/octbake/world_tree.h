@@ -202,8 +202,10 @@ class OCTBAKE_API WorldTree {
     MoveKind kind = MoveKind::same;
     uint8_t leaves = 0, enters = 0;
     uint8_t missing = 0;  // bit i: enter[i]'s cell was not in the table yet
-    std::array<uint32_t, kFastCells> leave, enter;  // slots (enter in [lo, hi] order)
-    std::array<bool, kFastCells> emptied;            // leave[i] left its cell empty
+    // Slots (enter in [lo, hi] order); a missing cell's enter is its packed
+    // coordinate until the serial step finds or makes its slot.
+    std::array<uint32_t, kFastCells> leave, enter;
+    std::array<bool, kFastCells> emptied;  // leave[i] left its cell empty
   };
 
   Coord cell_of(const Eigen::Vector3d& p) const;
