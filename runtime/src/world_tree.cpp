@@ -31,8 +31,8 @@ WorldTree::WorldTree(const Aabb& world, int depth) : world_(world), depth_(depth
   assert((world.max.array() > world.min.array()).all());
   inv_cell_ = Eigen::Vector3d::Constant(double(side_)).cwiseQuotient(world.max - world.min);
   for (int k = 0; k < 6; ++k) {
-    origin6_[k] = world.min[k % 3];
-    inv6_[k] = inv_cell_[k % 3];
+    origin6_[k] = world.min[k / 2];
+    inv6_[k] = inv_cell_[k / 2];
   }
 }
 

@@ -248,7 +248,7 @@ class OCTBAKE_API WorldTree {
   int depth_;
   uint32_t side_;  // cells per axis
   Eigen::Vector3d inv_cell_;
-  // cell_range's constants for the six bounds (min x y z, max x y z).
+  // cell_range's constants for the six bounds (min x, max x, min y, ...).
   alignas(16) std::array<double, 6> origin6_{}, inv6_{};
   uint64_t reinsertions_ = 0;
   std::vector<Entry> entries_;  // by id
@@ -298,19 +298,21 @@ inline WorldTree::CellRange WorldTree::cell_range(const Aabb& box) const {
   // moved object: the scalar clamps were most of its cost). The same
   // subtraction and product, so the same t; clamping t to [0, side - 1]
   // before truncating gives cell_of's cells (t >= side and t in
-  // [side - 1, side) both give side - 1).
-  const double bound[6] = {box.min[0], box.min[1], box.min[2], box.max[0], box.max[1], box.max[2]};
+  // [side - 1, side) both give side - 1). Lanes (min k, max k): each bound
+  // is read on its own, as set_pose has just stored it (a 16-byte load over
+  // two stores cannot take their values from the store buffer, and stalled
+  // set_pose until they reached the cache).
   const __m128d last = _mm_set1_pd(double(side_ - 1));
   alignas(16) std::array<int32_t, 8> cell;
-  for (int k = 0; k < 6; k += 2) {
-    __m128d t = _mm_mul_pd(_mm_sub_pd(_mm_loadu_pd(bound + k), _mm_load_pd(origin6_.data() + k)),
-                           _mm_load_pd(inv6_.data() + k));
+  for (int k = 0; k < 3; ++k) {
+    const __m128d bounds = _mm_loadh_pd(_mm_load_sd(&box.min[k]), &box.max[k]);
+    __m128d t = _mm_mul_pd(_mm_sub_pd(bounds, _mm_load_pd(origin6_.data() + 2 * k)), _mm_load_pd(inv6_.data() + 2 * k));
     t = _mm_min_pd(_mm_max_pd(t, _mm_setzero_pd()), last);
-    _mm_storel_epi64(reinterpret_cast<__m128i*>(cell.data() + k), _mm_cvttpd_epi32(t));
+    _mm_storel_epi64(reinterpret_cast<__m128i*>(cell.data() + 2 * k), _mm_cvttpd_epi32(t));
   }
   for (int k = 0; k < 3; ++k) {
-    r.lo[k] = uint16_t(cell[k]);
-    r.hi[k] = uint16_t(cell[3 + k]);
+    r.lo[k] = uint16_t(cell[2 * k]);
+    r.hi[k] = uint16_t(cell[2 * k + 1]);
   }
 #else
   r.lo = cell_of(box.min);
