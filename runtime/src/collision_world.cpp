@@ -782,7 +782,7 @@ void CollisionWorld::commit_poses() {
     }
   } on_world(this);
   // Inline: one pass over the cells; on threads, parts of disjoint cells
-  // (hashed by cell slot), two per pool thread: a frame's moves load the
+  // (runs of cell slots), two per pool thread: a frame's moves load the
   // parts unevenly, and a thread done with its own then helps with another
   // (10k objects, 2 threads: ~2% faster frames than one part per thread).
   const size_t parts = settings_.executor ? kCellParts

@@ -266,21 +266,24 @@ void WorldTree::plan_move(uint32_t id, const CellRange& r, Move& m) const {
 }
 
 // The arrivals and departures of the cells of part `part`: the slots in
-// busy_ words w with w % parts == part, so every busy word has one writer.
+// the part-th of parts equal runs of busy_ words, so every busy word has one
+// writer. Runs, not a hash: the pair scan hands its threads runs of words
+// too, so a cell tends to stay with the core that scans it.
 void WorldTree::apply_moves(std::span<const uint32_t> ids, size_t part, size_t parts) {
-  const uint32_t mask = uint32_t(parts - 1);
+  const uint64_t words = busy_.size();  // > 0: a fast move has cells
+  const auto part_of = [&](uint32_t slot) { return size_t(uint64_t(slot / 64) * parts / words); };
   int occupied = 0;
   for (size_t k = 0; k < ids.size(); ++k) {
     Move& m = moves_[k];
     if (m.kind != MoveKind::fast) continue;
     for (int i = 0; i < m.leaves; ++i)
-      if (((m.leave[i] / 64) & mask) == part) {
+      if (part_of(m.leave[i]) == part) {
         const int left = leave_cell(m.leave[i], ids[k]);
         m.emptied[i] = left != 0;  // this op's own byte: no other part writes it
         occupied += left;
       }
     for (int i = 0; i < m.enters; ++i)
-      if (((m.enter[i] / 64) & mask) == part) occupied += enter_cell(m.enter[i], ids[k]);
+      if (part_of(m.enter[i]) == part) occupied += enter_cell(m.enter[i], ids[k]);
   }
   std::atomic_ref<size_t>(occupied_).fetch_add(size_t(ptrdiff_t(occupied)), std::memory_order_relaxed);
 }
