@@ -270,20 +270,21 @@ void WorldTree::plan_move(uint32_t id, const CellRange& r, Move& m) const {
 // writer. Runs, not a hash: the pair scan hands its threads runs of words
 // too, so a cell tends to stay with the core that scans it.
 void WorldTree::apply_moves(std::span<const uint32_t> ids, size_t part, size_t parts) {
-  const uint64_t words = busy_.size();  // > 0: a fast move has cells
-  const auto part_of = [&](uint32_t slot) { return size_t(uint64_t(slot / 64) * parts / words); };
+  // This part's words: [first, end) (the slots 64 times that).
+  const uint64_t words = busy_.size(), first = words * part / parts, end = words * (part + 1) / parts;
+  const auto mine = [&](uint32_t slot) { return slot / 64 >= first && slot / 64 < end; };
   int occupied = 0;
   for (size_t k = 0; k < ids.size(); ++k) {
     Move& m = moves_[k];
     if (m.kind != MoveKind::fast) continue;
     for (int i = 0; i < m.leaves; ++i)
-      if (part_of(m.leave[i]) == part) {
+      if (mine(m.leave[i])) {
         const int left = leave_cell(m.leave[i], ids[k]);
         m.emptied[i] = left != 0;  // this op's own byte: no other part writes it
         occupied += left;
       }
     for (int i = 0; i < m.enters; ++i)
-      if (part_of(m.enter[i]) == part) occupied += enter_cell(m.enter[i], ids[k]);
+      if (mine(m.enter[i])) occupied += enter_cell(m.enter[i], ids[k]);
   }
   std::atomic_ref<size_t>(occupied_).fetch_add(size_t(ptrdiff_t(occupied)), std::memory_order_relaxed);
 }
