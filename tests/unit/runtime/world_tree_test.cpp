@@ -285,7 +285,8 @@ TEST(WorldTree, NeedsUpdatePredictsUpdate) {
     if (id >= boxes.size() || k % 53 == 0) {  // new or jumping
       const Eigen::Vector3d lo(at(rng), at(rng), at(rng));
       const double s = k % 7 == 0 ? 12 : 2 * unit(rng);  // 12^3 cells: over kMaxCells
-      const Aabb box{lo, lo + Eigen::Vector3d(s, s, s)};
+      // Different extents per axis: an axis mixed up shows.
+      const Aabb box{lo, lo + Eigen::Vector3d(s, s * (0.5 + unit(rng)), s * (0.5 + unit(rng)))};
       if (id >= boxes.size()) boxes.push_back(box); else boxes[id] = box;
     } else {
       const Eigen::Vector3d d(step(rng), step(rng), step(rng));
@@ -298,6 +299,12 @@ TEST(WorldTree, NeedsUpdatePredictsUpdate) {
     EXPECT_FALSE(tree.needs_update(id, box));
     (predicted ? changes : same)++;
     overflow += tree.in_overflow(id);
+    if (k % 97 == 0) {  // gone: any box needs an update, as does an id never seen
+      tree.remove(id);
+      ASSERT_TRUE(tree.needs_update(id, box));
+      ASSERT_TRUE(tree.update(id, box));
+    }
+    ASSERT_TRUE(tree.needs_update(1000 + id, box));
   }
   EXPECT_GT(changes, 500);  // both answers occur, and overflow
   EXPECT_GT(same, 500);
