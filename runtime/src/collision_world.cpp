@@ -48,7 +48,6 @@ RangeTask range_task(const F& f) {
 
 std::atomic<uint32_t> g_next_world_id{1};
 
-constexpr double kInfinity = std::numeric_limits<double>::infinity();
 // Slot::area when the depth was decided from a lower bound (see refresh_depth).
 constexpr double kAreaNotComputed = std::numeric_limits<double>::quiet_NaN();
 
@@ -65,10 +64,12 @@ bool unit_rotation(const Pose& p) {
 }
 
 // check_pose's test alone, inline: no Status built on the hot path.
-[[gnu::always_inline]] inline bool pose_ok(const Pose& p) {
+[[gnu::always_inline]] inline bool position_ok(const Pose& p) {
   const Eigen::Vector3d& x = p.position;
-  return std::isfinite(x[0]) && std::isfinite(x[1]) && std::isfinite(x[2]) && std::isfinite(p.scale) && p.scale > 0 &&
-         unit_rotation(p);
+  return std::isfinite(x[0]) && std::isfinite(x[1]) && std::isfinite(x[2]);
+}
+[[gnu::always_inline]] inline bool pose_ok(const Pose& p) {
+  return position_ok(p) && std::isfinite(p.scale) && p.scale > 0 && unit_rotation(p);
 }
 
 // pose_ok's verdict, with the first rule broken named.
@@ -92,9 +93,12 @@ bool same_camera(const Camera& a, const Camera& b) {
          a.far_plane == b.far_plane;
 }
 
+// The deepest depth the LOD lets an object of `max_depth` levels have.
+int deepest_allowed(const LodSettings& s, int max_depth) { return std::max(0, std::min(s.max_depth, max_depth)); }
+
 // choose_depths for one object (same rule, no allocation).
 int depth_for(const LodSettings& s, double area, double a_min, double a_max, int max_depth) {
-  const int hi = std::max(0, std::min(s.max_depth, max_depth));
+  const int hi = deepest_allowed(s, max_depth);
   const int lo = std::clamp(s.min_depth, 0, hi);
   switch (s.policy) {
     case LodPolicy::fixed: return hi;
@@ -495,7 +499,8 @@ Status CollisionWorld::set_pose(ObjectHandle h, const Pose& pose) {
   const Pose& now = slots_[h.slot].pose;
   const bool same_frame = same_frame_of(pose, now);
   if (same_frame && same_bits(pose.position, now.position)) return std::monostate{};
-  if (!pose_ok(pose)) return check_pose(pose);
+  // The same rotation and scale as the stored pose passed pose_ok already.
+  if (!(same_frame ? position_ok(pose) : pose_ok(pose))) return check_pose(pose);
   if (move_to(h.slot, pose, same_frame)) dirty_.push_back(h.slot);
   if (settings_.area_refresh == AreaRefresh::on_demand) any_stale_area_ = true;
   return std::monostate{};
@@ -638,8 +643,10 @@ uint64_t CollisionWorld::refresh_depth(uint32_t i) {
   // does screen when a lower bound already gives the deepest depth (screen
   // depths never fall as the area grows): near objects cost a bound only.
   if (settings_.lod.policy == LodPolicy::screen) {  // thesis returned above
+    // (An infinite pixel tolerance makes every depth the shallowest: such a
+    // world takes the exact path below, with the same result.)
     const OrientedBox box = place(tree_of(s).bounds(), s.pose);
-    const int deepest = depth_for(settings_.lod, kInfinity, 0, 0, max_depth_of(s));
+    const int deepest = deepest_allowed(settings_.lod, max_depth_of(s));
     if (depth_for(settings_.lod, pixel_area_lower_bound(view_, box), 0, 0, max_depth_of(s)) == deepest) {
       s.area = kAreaNotComputed;  // area() computes it if asked
       s.depth = deepest;

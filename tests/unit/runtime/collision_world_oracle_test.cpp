@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <limits>
 #include <map>
 #include <set>
 
@@ -102,7 +103,8 @@ class Driver {
       lod.policy = LodPolicy(below(rng_, 3));
       lod.min_depth = int(below(rng_, 3));
       lod.max_depth = lod.min_depth + int(below(rng_, 4));
-      lod.pixel_tolerance = uniform(rng_, 0.5, 8);
+      // Now and then an infinite tolerance: every depth the shallowest.
+      lod.pixel_tolerance = below(rng_, 4) == 0 ? std::numeric_limits<double>::infinity() : uniform(rng_, 0.5, 8);
       ASSERT_TRUE(world_->set_lod(lod).ok());
     }
   }
