@@ -190,19 +190,11 @@ bool WorldTree::update(uint32_t id, const Aabb& box) { return update_cells(id, c
 
 bool WorldTree::needs_update(uint32_t id, const Aabb& box) const {
 #if defined(__SSE2__)
-  // cell_range's cells (the same operations) compared with the entry's as
-  // they come, without building a CellRange: most moves keep their cells,
-  // and the same cells mean the same overflow. Half the instructions of
-  // needs_update(id, cell_range(box)), which set_pose pays per moved object.
+  // cell_range's cells compared with the entry's as they come, without
+  // building a CellRange: most moves keep their cells, and the same cells
+  // mean the same overflow. Set_pose asks this per moved object.
   if (!contains(id)) return true;
-  const __m128d last = _mm_set1_pd(double(side_ - 1));
-  __m128i c[3];  // axis k: cells of min k, max k (int32)
-  for (int k = 0; k < 3; ++k) {
-    const __m128d bounds = _mm_loadh_pd(_mm_load_sd(&box.min[k]), &box.max[k]);
-    __m128d t = _mm_mul_pd(_mm_sub_pd(bounds, _mm_load_pd(origin6_.data() + 2 * k)), _mm_load_pd(inv6_.data() + 2 * k));
-    t = _mm_min_pd(_mm_max_pd(t, _mm_setzero_pd()), last);
-    c[k] = _mm_cvttpd_epi32(t);
-  }
+  const __m128i c[3] = {axis_cells(box, 0), axis_cells(box, 1), axis_cells(box, 2)};
   // As the entry stores them: lo x, y, z, hi x, y, z (16-bit, all < 2^10).
   const __m128i xy = _mm_unpacklo_epi32(c[0], c[1]);                                      // lo x, lo y, hi x, hi y
   const __m128i zx = _mm_unpacklo_epi32(c[2], _mm_shuffle_epi32(c[0], 1));                // lo z, hi x, hi z, -

@@ -210,6 +210,10 @@ class OCTBAKE_API WorldTree {
 
   Coord cell_of(const Eigen::Vector3d& p) const;
   static uint64_t packed(const Coord& c) { return uint64_t(c[0]) | uint64_t(c[1]) << 16 | uint64_t(c[2]) << 32; }
+#if defined(__SSE2__)
+  // cell_of's cells of box.min[k] and box.max[k], in int32 lanes 0 and 1.
+  __m128i axis_cells(const Aabb& box, int k) const;
+#endif
   // Cells in the inclusive range [lo, hi].
   static uint64_t cell_count(const Coord& lo, const Coord& hi) {
     uint64_t n = 1;
@@ -248,7 +252,7 @@ class OCTBAKE_API WorldTree {
   int depth_;
   uint32_t side_;  // cells per axis
   Eigen::Vector3d inv_cell_;
-  // cell_range's constants for the six bounds (min x, max x, min y, ...).
+  // axis_cells' constants for the six bounds (min x, max x, min y, ...).
   alignas(16) std::array<double, 6> origin6_{}, inv6_{};
   uint64_t reinsertions_ = 0;
   std::vector<Entry> entries_;  // by id
@@ -290,26 +294,28 @@ inline WorldTree::Coord WorldTree::cell_of(const Eigen::Vector3d& p) const {
   return c;
 }
 
+#if defined(__SSE2__)
+inline __m128i WorldTree::axis_cells(const Aabb& box, int k) const {
+  // cell_of on two bounds at once (set_pose and commit_poses run this per
+  // moved object: the scalar clamps were most of its cost). The same
+  // subtraction and product, so the same t; clamping t to [0, side - 1]
+  // before truncating gives cell_of's cells (t >= side and t in
+  // [side - 1, side) both give side - 1). Each bound is read on its own, as
+  // set_pose has just stored it: a 16-byte load over two stores cannot take
+  // their values from the store buffer, and stalled set_pose until they
+  // reached the cache.
+  const __m128d bounds = _mm_loadh_pd(_mm_load_sd(&box.min[k]), &box.max[k]);
+  const __m128d t = _mm_mul_pd(_mm_sub_pd(bounds, _mm_load_pd(origin6_.data() + 2 * k)), _mm_load_pd(inv6_.data() + 2 * k));
+  return _mm_cvttpd_epi32(_mm_min_pd(_mm_max_pd(t, _mm_setzero_pd()), _mm_set1_pd(double(side_ - 1))));
+}
+#endif
+
 inline WorldTree::CellRange WorldTree::cell_range(const Aabb& box) const {
   assert(!box.min.hasNaN() && !box.max.hasNaN());
   CellRange r;
 #if defined(__SSE2__)
-  // cell_of on the six bounds, two at a time (commit_poses runs this per
-  // moved object: the scalar clamps were most of its cost). The same
-  // subtraction and product, so the same t; clamping t to [0, side - 1]
-  // before truncating gives cell_of's cells (t >= side and t in
-  // [side - 1, side) both give side - 1). Lanes (min k, max k): each bound
-  // is read on its own, as set_pose has just stored it (a 16-byte load over
-  // two stores cannot take their values from the store buffer, and stalled
-  // set_pose until they reached the cache).
-  const __m128d last = _mm_set1_pd(double(side_ - 1));
   alignas(16) std::array<int32_t, 8> cell;
-  for (int k = 0; k < 3; ++k) {
-    const __m128d bounds = _mm_loadh_pd(_mm_load_sd(&box.min[k]), &box.max[k]);
-    __m128d t = _mm_mul_pd(_mm_sub_pd(bounds, _mm_load_pd(origin6_.data() + 2 * k)), _mm_load_pd(inv6_.data() + 2 * k));
-    t = _mm_min_pd(_mm_max_pd(t, _mm_setzero_pd()), last);
-    _mm_storel_epi64(reinterpret_cast<__m128i*>(cell.data() + 2 * k), _mm_cvttpd_epi32(t));
-  }
+  for (int k = 0; k < 3; ++k) _mm_storel_epi64(reinterpret_cast<__m128i*>(cell.data() + 2 * k), axis_cells(box, k));
   for (int k = 0; k < 3; ++k) {
     r.lo[k] = uint16_t(cell[2 * k]);
     r.hi[k] = uint16_t(cell[2 * k + 1]);
