@@ -300,7 +300,7 @@ ThreadPool::~ThreadPool() {
   for (std::thread& t : state_->workers) t.join();
 }
 
-int ThreadPool::threads() const { return int(state_->workers.size()) + 1; }
+int ThreadPool::threads() const { return int(state_->threads); }
 
 void ThreadPool::parallel_for(size_t count, size_t grain, RangeTask task) {
   State& s = *state_;

@@ -281,8 +281,12 @@ void WorldTree::plan_move(uint32_t id, const CellRange& r, Move& m) const {
     if (inside(c, e.lo, e.hi)) return;
     const uint32_t key = pack(c);
     const size_t t = table_find(key);  // the table is not empty: e has cells
-    if (table_[t] == 0) m.missing |= uint8_t(1u << m.enters);
-    m.enter[m.enters++] = table_[t] != 0 ? uint32_t(table_[t]) : key;
+    if (table_[t] == 0) {
+      m.missing |= uint8_t(1u << m.enters);
+      m.enter[m.enters++] = key;
+    } else {
+      m.enter[m.enters++] = uint32_t(table_[t]);
+    }
   });
 }
 

@@ -77,9 +77,8 @@ class OCTBAKE_API WorldTree {
   bool update_cells(uint32_t id, const CellRange& range);
   // Would update_cells(id, range) change anything (a new id, or other cells)?
   bool needs_update(uint32_t id, const CellRange& range) const;
-  // The same for update(id, box), out of line: set_pose asks it for every
-  // moved object, and a CellRange returned from an out-of-line cell_range
-  // was assembled through the stack (a tenth of a 1,000-object frame).
+  // The same for update(id, box), without building a CellRange: set_pose
+  // asks it for every moved object.
   bool needs_update(uint32_t id, const Aabb& box) const;
   // What the batch below runs its parts on: calls task(ctx, begin, end) on
   // disjoint ranges covering [0, count) exactly once, on any threads, in any

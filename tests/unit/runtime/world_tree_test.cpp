@@ -273,7 +273,7 @@ TEST(WorldTree, UpdateWithinSameCellsIsNotAChange) {
 
 // needs_update(id, box) predicts update(id, box)'s answer: boxes walking in
 // small steps (mostly within their cells) in and beyond a unit-cell world,
-// jumping now and then, some huge (overflow), new ids too.
+// jumping now and then, some huge (overflow), new, removed and unseen ids.
 TEST(WorldTree, NeedsUpdatePredictsUpdate) {
   std::mt19937 rng(41);
   std::uniform_real_distribution<double> step(-0.15, 0.15), at(-4, 36), unit(0, 1);
