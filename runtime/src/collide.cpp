@@ -350,6 +350,7 @@ struct Level {
   const Lanes* offset;       // the children's offsets, octant order (times scale)
   double scale;              // 1 if kScaled, else 2^-d
   const uint8_t* masks;      // child masks of the split tree at depth d
+  const uint32_t* first_child;  // and the index of each box's first child at d + 1
   uint8_t da, db;            // depths of the box pairs at this level
   bool split_a;              // A's box splits (else B's)
   bool other_leaf;           // the other box is a leaf (containment early out)
@@ -509,7 +510,9 @@ class PairFrame {
     lv.d = uint8_t(sa ? da : db);
     lv.other = uint8_t(sa ? db : da);
     lv.other_leaf = sa ? db == depth_b_ : da == depth_a_;
-    lv.masks = (sa ? tree_a_ : tree_b_)->masks().masks[size_t(lv.d)].data();
+    const ObjectTree& split_tree = sa ? *tree_a_ : *tree_b_;
+    lv.masks = split_tree.masks().masks[size_t(lv.d)].data();
+    lv.first_child = split_tree.first_children(lv.d);
     // Radii of the box pairs below: the split side one depth deeper.
     const double ha = kHalfPow[da + sa], hb = kHalfPow[db + !sa];
     for (int k = 0; k < kLanes; k += 4) {
@@ -698,6 +701,8 @@ template <bool kFirstOnly, class K, class OnLeaf>
   }
   open[0].coord[0] = open[0].coord[1] = 0;
   open[0].index[0] = open[0].index[1] = 0;
+  // Counted in a local (a register): result may alias what on_leaf writes.
+  uint64_t box_tests = result.box_tests;
   Open* top = open;  // the pair open at the deepest level, l
   int l = 0;
   for (;;) {
@@ -712,7 +717,7 @@ template <bool kFirstOnly, class K, class OnLeaf>
       Coord leaf;
       const ObjectTree& tree = lv.split_a ? *a.tree : *b.tree;
       if (some_leaf(tree, lv.split_a ? a.depth : b.depth, lv.d, index, unpack(o.coord[side]), leaf)) {
-        ++result.box_tests;
+        result.box_tests = box_tests + 1;
         result.hit = true;
         const Coord other = unpack(o.coord[1 - side]);
         lv.split_a ? on_leaf(leaf, other) : on_leaf(other, leaf);
@@ -722,7 +727,7 @@ template <bool kFirstOnly, class K, class OnLeaf>
     const uint8_t mask = lv.masks[index];
     const int count = kOctants.count[mask];
     const uint32_t hits = PairFrame<K>::template children_overlap<!kFirstOnly>(lv, o.p, kOctants.octant[mask], count);
-    result.box_tests += uint64_t(count);
+    box_tests += uint64_t(count);
     o.next = o.count = 0;
     if (hits != 0) {
       // Squared centre distances of the children by octant (lanes 0..2: the
@@ -756,6 +761,7 @@ template <bool kFirstOnly, class K, class OnLeaf>
             if (key[j] < key[best]) best = j;
           }
           report(best);
+          result.box_tests = box_tests;
           return;
         }
         for (uint32_t rest = hits; rest != 0; rest &= rest - 1) report(std::countr_zero(rest));
@@ -769,13 +775,16 @@ template <bool kFirstOnly, class K, class OnLeaf>
           for (uint32_t rest = hits; rest != 0; rest &= rest - 1) o.order[m++] = uint8_t(std::countr_zero(rest));
         }
         o.count = uint8_t(m);
-        o.first = (lv.split_a ? *a.tree : *b.tree).first_child(lv.d, index);
+        o.first = lv.first_child[index];
         o.mask = mask;
       }
     }
     // Back to the deepest level with a child left to visit.
     for (; top->next == top->count; --l)
-      if (top-- == open) return;
+      if (top-- == open) {
+        result.box_tests = box_tests;
+        return;
+      }
     Open& parent = *top;
     const Level& plv = frame.known_level(l);
     Open& child = *++top;

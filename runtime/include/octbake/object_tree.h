@@ -30,6 +30,9 @@ class OCTBAKE_API ObjectTree {
   uint8_t mask(int d, uint32_t i) const { return masks_.masks[d][i]; }
   // Index in depth d+1 of box i's first child (children are consecutive).
   uint32_t first_child(int d, uint32_t i) const { return first_child_[d][i]; }
+  // first_child(d, i) for every box i of depth d < loaded_depth(), as one array
+  // (for loops that look up many boxes of one depth).
+  const uint32_t* first_children(int d) const { return first_child_[d].data(); }
 
   // Growing and shrinking by levels (streaming, see level_cache.h).
   // Appends the child masks of depth loaded_depth() (one byte per box of that
