@@ -13,6 +13,7 @@
 #include <cassert>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <functional>
 
 #if defined(__x86_64__)
@@ -769,10 +770,14 @@ template <bool kFirstOnly, class K, class OnLeaf>
         int m = 0;
         if (ranked) {
           m = K::nearest_order(key, hits, o.order);
+        } else if (kFirstOnly) {  // one child
+          o.order[0] = uint8_t(std::countr_zero(hits));
+          m = 1;
         } else {
-          // One child, or every overlapping pair is visited: the order
-          // cannot matter.
-          for (uint32_t rest = hits; rest != 0; rest &= rest - 1) o.order[m++] = uint8_t(std::countr_zero(rest));
+          // Every overlapping pair is visited: octant order, from a table
+          // (a loop over the bits was a branch mispredicted at every pair).
+          std::memcpy(o.order, kOctants.octant[hits], sizeof o.order);
+          m = kOctants.count[hits];
         }
         o.count = uint8_t(m);
         o.first = lv.first_child[index];
