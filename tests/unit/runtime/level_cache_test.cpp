@@ -44,7 +44,10 @@ class Cache : public ::testing::Test {
       ASSERT_EQ(t.loaded_depth(), cache.held_depth(id));
       for (int d = 0; d < t.loaded_depth(); ++d) {
         ASSERT_EQ(t.masks().masks[d], full_[id].masks().masks[d]) << "tree " << id << " depth " << d;
-        for (uint32_t i = 0; i < t.masks().masks[d].size(); ++i) ASSERT_EQ(t.first_child(d, i), full_[id].first_child(d, i));
+        for (uint32_t i = 0; i < t.masks().masks[d].size(); ++i) {
+          ASSERT_EQ(t.first_child(d, i), full_[id].first_child(d, i));
+          ASSERT_EQ(t.first_children(d)[i], t.first_child(d, i));  // the array the pair test reads
+        }
       }
       held += bytes_at(id, t.loaded_depth());
     }
