@@ -702,13 +702,8 @@ template <bool kFirstOnly, class K, class OnLeaf>
   }
   open[0].coord[0] = open[0].coord[1] = 0;
   open[0].index[0] = open[0].index[1] = 0;
-  // Box tests are counted in a local (kept in a register: result may alias
-  // what on_leaf writes) and stored on every way out.
-  struct Count {
-    PairTest& result;
-    uint64_t n;
-    ~Count() { result.box_tests = n; }
-  } box_tests{result, result.box_tests};
+  // Counted in a local (a register): result may alias what on_leaf writes.
+  uint64_t box_tests = result.box_tests;
   Open* top = open;  // the pair open at the deepest level, l
   int l = 0;
   for (;;) {
@@ -723,7 +718,7 @@ template <bool kFirstOnly, class K, class OnLeaf>
       Coord leaf;
       const ObjectTree& tree = lv.split_a ? *a.tree : *b.tree;
       if (some_leaf(tree, lv.split_a ? a.depth : b.depth, lv.d, index, unpack(o.coord[side]), leaf)) {
-        ++box_tests.n;
+        result.box_tests = box_tests + 1;
         result.hit = true;
         const Coord other = unpack(o.coord[1 - side]);
         lv.split_a ? on_leaf(leaf, other) : on_leaf(other, leaf);
@@ -733,7 +728,7 @@ template <bool kFirstOnly, class K, class OnLeaf>
     const uint8_t mask = lv.masks[index];
     const int count = kOctants.count[mask];
     const uint32_t hits = PairFrame<K>::template children_overlap<!kFirstOnly>(lv, o.p, kOctants.octant[mask], count);
-    box_tests.n += uint64_t(count);
+    box_tests += uint64_t(count);
     o.next = o.count = 0;
     if (hits != 0) {
       // Squared centre distances of the children by octant (lanes 0..2: the
@@ -767,6 +762,7 @@ template <bool kFirstOnly, class K, class OnLeaf>
             if (key[j] < key[best]) best = j;
           }
           report(best);
+          result.box_tests = box_tests;
           return;
         }
         for (uint32_t rest = hits; rest != 0; rest &= rest - 1) report(std::countr_zero(rest));
@@ -790,7 +786,10 @@ template <bool kFirstOnly, class K, class OnLeaf>
     }
     // Back to the deepest level with a child left to visit.
     for (; top->next == top->count; --l)
-      if (top-- == open) return;
+      if (top-- == open) {
+        result.box_tests = box_tests;
+        return;
+      }
     Open& parent = *top;
     const Level& plv = frame.known_level(l);
     Open& child = *++top;
