@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <cstring>
 #include <functional>
+#include <vector>
 
 #if defined(__x86_64__)
 #include <immintrin.h>
@@ -154,6 +155,13 @@ struct Portable {
     return overlapping;
   }
 
+  // One child (projections p + offset) against radius: do they overlap?
+  [[gnu::always_inline]] static bool child_overlaps(const double* p, const double* offset, const double* radius) {
+    bool separated = false;
+    for (int k = 0; k < kLanes; ++k) separated |= std::abs(p[k] + offset[k]) > radius[k];
+    return !separated;
+  }
+
   // Nearest first: order[0..) = the octants of `hits`, by key[octant]
   // ascending, ties in octant order (a stable sort). Returns how many.
   [[gnu::always_inline]] static int nearest_order(const double* key, uint32_t hits, uint8_t* order) {
@@ -201,6 +209,18 @@ struct Avx2 {
     return overlapping;
   }
 
+  [[gnu::target("avx2")]] static bool child_overlaps(const double* p, const double* offset,
+                                                                        const double* radius) {
+    const __m256d not_sign = _mm256_castsi256_pd(_mm256_set1_epi64x(INT64_MAX));
+    __m256d separated = _mm256_setzero_pd();
+    for (int k = 0; k < 4; ++k) {
+      const __m256d q = _mm256_add_pd(_mm256_loadu_pd(p + 4 * k), _mm256_loadu_pd(offset + 4 * k));
+      separated =
+          _mm256_or_pd(separated, _mm256_cmp_pd(_mm256_and_pd(q, not_sign), _mm256_loadu_pd(radius + 4 * k), _CMP_GT_OQ));
+    }
+    return _mm256_testz_pd(separated, separated);
+  }
+
   // As Portable::nearest_order: each rank counts the keys below (and the
   // equal ones of lower octants) with two vector comparisons per half.
   [[gnu::target("avx2")]] static int nearest_order(const double* key, uint32_t hits, uint8_t* order) {
@@ -239,6 +259,14 @@ struct Avx512 {
       overlapping |= uint32_t(separated == 0) << octant[c];
     }
     return overlapping;
+  }
+
+  [[gnu::target("avx512f")]] static bool child_overlaps(const double* p, const double* offset,
+                                                                           const double* radius) {
+    const __m512d q0 = _mm512_add_pd(_mm512_loadu_pd(p), _mm512_loadu_pd(offset));
+    const __m512d q1 = _mm512_add_pd(_mm512_loadu_pd(p + 8), _mm512_loadu_pd(offset + 8));
+    return (_mm512_cmp_pd_mask(_mm512_abs_pd(q0), _mm512_loadu_pd(radius), _CMP_GT_OQ) |
+            _mm512_cmp_pd_mask(_mm512_abs_pd(q1), _mm512_loadu_pd(radius + 8), _CMP_GT_OQ)) == 0;
   }
 
   [[gnu::target("avx512f")]] static int nearest_order(const double* key, uint32_t hits, uint8_t* order) {
@@ -670,15 +698,15 @@ bool some_leaf(const ObjectTree& tree, int depth, int d, uint32_t index, const C
   return false;
 }
 
-// Depth-first descent in canonical order, calling on_leaf(a's leaf, b's
-// leaf) for each overlapping leaf pair: only the first if kFirstOnly.
+// collide's depth-first descent in canonical order, nearest children first,
+// calling on_leaf(a's leaf, b's leaf) for the first overlapping leaf pair.
 //
 // Depth first, the box pairs waiting at path level L + 1 are all children of
 // the one pair open at level L, so the descent keeps one record per level: the
 // open pair (projections, indices, coordinates) and its overlapping children
 // still to visit, in visiting order. A child's projections are recomputed
 // from its parent's when it is visited (the same sums the kernel did).
-template <bool kFirstOnly, class K, class OnLeaf>
+template <class K, class OnLeaf>
 [[gnu::always_inline]] inline void descend(const PairFrame<K>& frame, const PlacedTree& a, const PlacedTree& b,
                                            PairTest& result, OnLeaf on_leaf) {
   struct Open {
@@ -709,12 +737,12 @@ template <bool kFirstOnly, class K, class OnLeaf>
   for (;;) {
     // Expand the pair open at level l.
     Open& o = *top;
-    const Level& lv = frame.template level<!kFirstOnly>(l);
+    const Level& lv = frame.template level<false>(l);
     const int side = lv.split_a ? 0 : 1;
     const uint32_t index = o.index[side];
     // The other box is a leaf and holds this one whole: any leaf below is a
     // proof (counted as the one box test it replaces).
-    if (kFirstOnly && lv.other_leaf && frame.split_box_inside(o.p, lv)) {
+    if (lv.other_leaf && frame.split_box_inside(o.p, lv)) {
       Coord leaf;
       const ObjectTree& tree = lv.split_a ? *a.tree : *b.tree;
       if (some_leaf(tree, lv.split_a ? a.depth : b.depth, lv.d, index, unpack(o.coord[side]), leaf)) {
@@ -727,7 +755,7 @@ template <bool kFirstOnly, class K, class OnLeaf>
     }
     const uint8_t mask = lv.masks[index];
     const int count = kOctants.count[mask];
-    const uint32_t hits = PairFrame<K>::template children_overlap<!kFirstOnly>(lv, o.p, kOctants.octant[mask], count);
+    const uint32_t hits = PairFrame<K>::template children_overlap<false>(lv, o.p, kOctants.octant[mask], count);
     box_tests += uint64_t(count);
     o.next = o.count = 0;
     if (hits != 0) {
@@ -735,7 +763,7 @@ template <bool kFirstOnly, class K, class OnLeaf>
       // offset in A's axes), the same sums as the kernel's (by octant); only
       // needed to rank two or more.
       alignas(32) double key[8];
-      const bool ranked = kFirstOnly && (hits & (hits - 1)) != 0;
+      const bool ranked = (hits & (hits - 1)) != 0;
       if (ranked) {
         const double(*centre)[8] = frame.centres(lv);
         for (int h = 0; h < 8; h += 4) {
@@ -752,33 +780,23 @@ template <bool kFirstOnly, class K, class OnLeaf>
         lv.split_a ? on_leaf(unpack(grown), unpack(o.coord[1])) : on_leaf(unpack(o.coord[0]), unpack(grown));
       };
       if (l + 1 == levels) {
-        // The children are leaf pairs: reported here (the first only: just
-        // the nearest, ties in octant order).
+        // The children are leaf pairs: the nearest is reported here (ties in
+        // octant order).
         result.hit = true;
-        if (kFirstOnly) {
-          int best = std::countr_zero(hits);
-          for (uint32_t rest = hits & (hits - 1); rest != 0; rest &= rest - 1) {
-            const int j = std::countr_zero(rest);
-            if (key[j] < key[best]) best = j;
-          }
-          report(best);
-          result.box_tests = box_tests;
-          return;
+        int best = std::countr_zero(hits);
+        for (uint32_t rest = hits & (hits - 1); rest != 0; rest &= rest - 1) {
+          const int j = std::countr_zero(rest);
+          if (key[j] < key[best]) best = j;
         }
-        for (uint32_t rest = hits; rest != 0; rest &= rest - 1) report(std::countr_zero(rest));
+        report(best);
+        result.box_tests = box_tests;
+        return;
       } else {
-        int m = 0;
-        if (ranked) {
+        int m = 1;
+        if (ranked)
           m = K::nearest_order(key, hits, o.order);
-        } else if (kFirstOnly) {  // one child
+        else  // one child
           o.order[0] = uint8_t(std::countr_zero(hits));
-          m = 1;
-        } else {
-          // Every overlapping pair is visited: octant order, from a table
-          // (a loop over the bits was a branch mispredicted at every pair).
-          std::memcpy(o.order, kOctants.octant[hits], sizeof o.order);
-          m = kOctants.count[hits];
-        }
         o.count = uint8_t(m);
         o.first = lv.first_child[index];
         o.mask = mask;
@@ -796,11 +814,122 @@ template <bool kFirstOnly, class K, class OnLeaf>
     ++l;
     const uint8_t j = parent.order[parent.next++];
     const int split = plv.split_a ? 0 : 1;
-    add_lanes<kFirstOnly>(child.p, parent.p, plv.offset[j], plv.scale);
+    add_lanes<true>(child.p, parent.p, plv.offset[j], plv.scale);
     child.index[0] = parent.index[0], child.index[1] = parent.index[1];
     child.coord[0] = parent.coord[0], child.coord[1] = parent.coord[1];
     child.index[split] = parent.first + uint32_t(std::popcount(unsigned(parent.mask & ((1u << j) - 1))));
     child.coord[split] = child_of(parent.coord[split], j);
+  }
+}
+
+// Every overlapping leaf pair (collide_all), breadth first in batches.
+// Every overlapping pair is visited, so the order of the visits does not
+// change which boxes are tested: the pairs of a level are expanded a batch at
+// a time, their occupied children listed (octant table), tested in one flat
+// loop and the overlapping ones kept, in order, by advancing an index by the
+// test's result (the depth-first walk branched on "any child? how many? back
+// up?" at every pair, and mispredicted most of them). A level's list is
+// consumed before the next batch of the level above, so memory stays bounded
+// (8 kBatch pairs a level) and the leaf pairs come out in depth-first order,
+// children in octant order. The leaf level is reported, not stored.
+constexpr int kBatch = 32;
+constexpr int kLevelCap = 8 * kBatch;
+// The box pairs of one level (projections apart: a pair's is at p + 16 i).
+struct SweepLevel {
+  alignas(64) Lanes p[kLevelCap];
+  Packed coord[kLevelCap][2];    // A's, B's
+  uint32_t index[kLevelCap][2];  // level indices, A's, B's
+};
+
+template <class K, class OnLeaf>
+[[gnu::always_inline]] inline void sweep_all(const PairFrame<K>& frame, PairTest& result, OnLeaf on_leaf) {
+  Lanes root;
+  frame.project({0, 0, 0}, 0, {0, 0, 0}, 0, root);
+  ++result.box_tests;
+  if (!frame.overlap(root, 0, 0)) return;
+  const int levels = frame.levels();
+  if (levels == 0) {  // neither can split: the roots are the leaf pair
+    result.hit = true;
+    on_leaf(Coord{0, 0, 0}, Coord{0, 0, 0});
+    return;
+  }
+  // Per thread, reused: one list per level but the leaves'.
+  static thread_local std::vector<SweepLevel> lists;
+  if (lists.size() < size_t(levels)) lists.resize(size_t(levels));
+  SweepLevel* const list = lists.data();
+  std::memcpy(list[0].p[0], root, sizeof root);
+  list[0].coord[0][0] = list[0].coord[0][1] = 0;
+  list[0].index[0][0] = list[0].index[0][1] = 0;
+  int size[kPathLevels], head[kPathLevels];
+  size[0] = 1, head[0] = 0;
+  uint64_t box_tests = result.box_tests;
+  int l = 0;
+  for (;;) {
+    // The deepest level with pairs left to expand.
+    for (; head[l] == size[l]; --l)
+      if (l == 0) {
+        result.box_tests = box_tests;
+        return;
+      }
+    const Level& lv = frame.template level<true>(l);
+    const int side = lv.split_a ? 0 : 1;
+    const SweepLevel& in = list[l];
+    const int begin = head[l], end = std::min(size[l], begin + kBatch);
+    head[l] = end;
+    // The occupied children of the batch, in order (8 written, count kept).
+    // Candidate c of pair i is child c - (pair i's first candidate) of its
+    // box: its level index is child_base[i] + c.
+    uint8_t octant[kLevelCap + 8];
+    uint8_t parent[kLevelCap + 8];
+    uint32_t child_base[kBatch];
+    int n = 0;
+    for (int i = 0; i < end - begin; ++i) {
+      const uint32_t index = in.index[begin + i][side];
+      const uint8_t mask = lv.masks[index];
+      std::memcpy(octant + n, kOctants.octant[mask], 8);
+      std::memset(parent + n, i, 8);
+      child_base[i] = lv.first_child[index] - uint32_t(n);
+      n += kOctants.count[mask];
+    }
+    box_tests += uint64_t(n);
+    const Lanes* batch = in.p + begin;
+    // Test them: bit c of kept[c / 64] tells whether candidate c overlaps.
+    uint64_t kept[kLevelCap / 64];
+    const int words = (n + 63) / 64;
+    for (int w = 0; w < words; ++w) {
+      uint64_t bits = 0;
+      for (int c = 64 * w, last = std::min(n, c + 64); c < last; ++c)
+        bits |= uint64_t(K::child_overlaps(batch[parent[c]], lv.offset[octant[c]], lv.radius)) << (c & 63);
+      kept[w] = bits;
+    }
+    // The overlapping ones, in order: leaf pairs reported, others listed.
+    const bool leaves = l + 1 == levels;
+    SweepLevel& out = list[leaves ? l : l + 1];
+    int m = 0;
+    for (int w = 0; w < words; ++w)
+      for (uint64_t bits = kept[w]; bits != 0; bits &= bits - 1) {
+        const int c = 64 * w + std::countr_zero(bits);
+        const int i = begin + parent[c];
+        const uint8_t j = octant[c];
+        const Packed grown = child_of(in.coord[i][side], j);
+        if (leaves) {
+          side == 0 ? on_leaf(unpack(grown), unpack(in.coord[i][1])) : on_leaf(unpack(in.coord[i][0]), unpack(grown));
+          ++m;
+          continue;
+        }
+        add_lanes<false>(out.p[m], in.p[i], lv.offset[j], 1);
+        out.coord[m][0] = in.coord[i][0], out.coord[m][1] = in.coord[i][1];
+        out.index[m][0] = in.index[i][0], out.index[m][1] = in.index[i][1];
+        out.coord[m][side] = grown;
+        out.index[m][side] = child_base[parent[c]] + uint32_t(c);
+        ++m;
+      }
+    if (leaves) {
+      result.hit |= m > 0;
+      continue;
+    }
+    size[l + 1] = m, head[l + 1] = 0;
+    ++l;
   }
 }
 
@@ -831,8 +960,8 @@ template <class K>
   const PairFrame<K> frame(pair.first, pair.second);
   PairTest result;
   if (job.all) {
-    descend<false>(frame, pair.first, pair.second, result,
-                   [&](const Coord& ca, const Coord& cb) { job.all->push_back(pair.to_caller(ca, cb)); });
+    sweep_all(frame, result,
+              [&](const Coord& ca, const Coord& cb) { job.all->push_back(pair.to_caller(ca, cb)); });
     return result;
   }
   if (job.hint) {
@@ -847,8 +976,8 @@ template <class K>
       return result;
     }
   }
-  descend<true>(frame, pair.first, pair.second, result,
-                [&](const Coord& ca, const Coord& cb) { result.leaf = pair.to_caller(ca, cb); });
+  descend(frame, pair.first, pair.second, result,
+          [&](const Coord& ca, const Coord& cb) { result.leaf = pair.to_caller(ca, cb); });
   return result;
 }
 

@@ -10,19 +10,28 @@
 // level of the descent is worked out once per pair, when the descent first
 // reaches it (most pair tests end after a few). All occupied children of the
 // split box are tested against the other box in one go, and the overlapping
-// ones are visited nearest first (distance between box centres; collide_all,
-// which visits every one, takes them in octant order), depth first, with full
-// backtracking. The first overlapping leaf pair ends the descent (early out):
-// that pair proves the hit and is reported (children that are leaf pairs are
-// reported where they are tested, the nearest one, without being visited).
-// So a small object against a large one walks down the large tree first, and
-// the pairs most likely to touch are tried first.
+// ones are visited nearest first (distance between box centres), depth first,
+// with full backtracking. The first overlapping leaf pair ends the descent
+// (early out): that pair proves the hit and is reported (children that are leaf
+// pairs are reported where they are tested, the nearest one, without being
+// visited). So a small object against a large one walks down the large tree
+// first, and the pairs most likely to touch are tried first.
 // One more early out: when the other box is already a leaf and holds the box
 // about to split whole (with a margin of one pad), any occupied leaf below
 // overlaps it, so the first one found (lowest octants first) proves the hit.
 // box_tests counts each child box tested, the root pair, a cached pair
 // (PairCache) and a containment proof (one each); a containment check that
 // fails reuses the pair's projections and is not counted.
+// collide_all has no early out, so the order of its visits cannot change which
+// box pairs it tests: it expands the same pairs (the same split schedule, every
+// overlapping child) breadth first, a batch of up to 32 pairs of a level at a
+// time: their occupied children are listed, tested in one flat loop without
+// branching on the results, and the overlapping ones become the next level's
+// batch. A level's pairs are all expanded before the next batch of the level
+// above, so memory stays bounded (at most 256 pairs a level, kept per thread
+// between calls) and leaf pairs come out in depth-first order, children in
+// octant order. Its box_tests are those of a depth-first walk over the same
+// pairs.
 //
 // Box tests at memory speed. The 8 children of a box share its axes and sit at
 // its centre plus or minus a quarter of its size, so a child's projection on
@@ -32,11 +41,12 @@
 // comparisons against precomputed radii (collide_all's offsets are scaled to
 // each depth beforehand, collide's by a power of two in the test: exact
 // either way; double precision; AVX-512 or AVX2 where the CPU has them, plain
-// C++ otherwise; all give identical bits). Nothing is stored for a child
-// that is tested: the descent keeps one record per path level (the pair open
-// there and its overlapping children still to visit) and recomputes a
-// child's projections when it visits it. The whole pair test is compiled
-// once per ISA with its kernel inlined and the build is chosen once per pair.
+// C++ otherwise; all give identical bits). Nothing is stored for a child that
+// is tested: collide's descent keeps one record per path level (the pair open
+// there and its overlapping children still to visit), and both compute a
+// child's projections from its parent's when they visit it (the same sums as
+// the test). The whole pair test is compiled once per ISA with its kernel
+// inlined and the build is chosen once per pair.
 //
 // Why it is conservative. If the meshes touch at a point x, x lies in an
 // occupied leaf box of each tree (the occupancy is conservative) and so in

@@ -189,6 +189,50 @@ TEST(Collide, ScaleIsRelative) {
   }
 }
 
+// Dense trees overlapping over a wide region: levels of hundreds of box
+// pairs, which collide_all expands in many batches (of up to 32 pairs, their
+// children tested 64 to a word): still exactly the overlapping leaf pairs of a
+// brute-force test, each once, in the same order from every build.
+TEST(Collide, AllLeafPairsOfWideLevelsMatchBruteForce) {
+  const ObjectTree ta = full_tree(kUnit, 4), tb = full_tree(kUnit, 3);
+  const Eigen::Quaterniond turn(Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, 2, 3).normalized()));
+  const PlacedTree a{&ta, at({0, 0, 0}), 4}, b{&tb, at({0.43, 0.31, 0.17}, turn, 1.1), 3};
+  std::vector<WorldBox> boxes_b;
+  const std::vector<BoxCoord> leaves_b = tb.masks().boxes(3);
+  for (const BoxCoord& cb : leaves_b) boxes_b.push_back(world_box(place(tb.masks().box_bounds(3, cb), b.pose)));
+  std::vector<LeafPair> expected;
+  for (const BoxCoord& ca : ta.masks().boxes(4)) {
+    const WorldBox box_a = world_box(place(ta.masks().box_bounds(4, ca), a.pose));
+    for (size_t j = 0; j < leaves_b.size(); ++j)
+      if (boxes_overlap(box_a, boxes_b[j])) expected.push_back({ca, leaves_b[j]});
+  }
+  std::vector<LeafPair> found;
+  const PairTest all = collide_all(a, b, found);
+  EXPECT_TRUE(all.hit);
+  // More leaf pairs than one batch's children can give: many batches.
+  EXPECT_GT(found.size(), 4u * 256);
+  auto by_key = [](const LeafPair& x, const LeafPair& y) { return key(x) < key(y); };
+  std::vector<LeafPair> sorted_found = found;
+  std::sort(expected.begin(), expected.end(), by_key);
+  std::sort(sorted_found.begin(), sorted_found.end(), by_key);
+  ASSERT_EQ(sorted_found.size(), expected.size());
+  for (size_t i = 0; i < expected.size(); ++i) ASSERT_EQ(key(sorted_found[i]), key(expected[i])) << i;
+
+  std::vector<LeafPair> found_ba;
+  EXPECT_EQ(collide_all(b, a, found_ba).box_tests, all.box_tests);
+  ASSERT_EQ(found_ba.size(), found.size());
+  for (size_t i = 0; i < found.size(); ++i) ASSERT_EQ(key(found_ba[i]), key(LeafPair{found[i].b, found[i].a})) << i;
+  for (const BoxKernel k : {BoxKernel::portable, BoxKernel::avx2, BoxKernel::avx512}) {
+    if (!use_box_kernel(k)) continue;
+    std::vector<LeafPair> again;
+    const PairTest r = collide_all(a, b, again);
+    ASSERT_TRUE(use_box_kernel(BoxKernel::best));
+    EXPECT_EQ(r.box_tests, all.box_tests);
+    ASSERT_EQ(again.size(), found.size());
+    for (size_t i = 0; i < found.size(); ++i) ASSERT_EQ(key(again[i]), key(found[i])) << i;
+  }
+}
+
 // Random trees and poses: collide_all finds exactly the overlapping leaf pairs
 // of a brute-force test, collide agrees, and both orders give the same answer.
 TEST(Collide, AllLeafPairsMatchBruteForce) {
