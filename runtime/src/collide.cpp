@@ -209,14 +209,13 @@ struct Avx2 {
     return overlapping;
   }
 
-  [[gnu::target("avx2")]] static bool child_overlaps(const double* p, const double* offset,
-                                                                        const double* radius) {
+  [[gnu::target("avx2")]] static bool child_overlaps(const double* p, const double* offset, const double* radius) {
     const __m256d not_sign = _mm256_castsi256_pd(_mm256_set1_epi64x(INT64_MAX));
     __m256d separated = _mm256_setzero_pd();
     for (int k = 0; k < 4; ++k) {
       const __m256d q = _mm256_add_pd(_mm256_loadu_pd(p + 4 * k), _mm256_loadu_pd(offset + 4 * k));
-      separated =
-          _mm256_or_pd(separated, _mm256_cmp_pd(_mm256_and_pd(q, not_sign), _mm256_loadu_pd(radius + 4 * k), _CMP_GT_OQ));
+      const __m256d r = _mm256_loadu_pd(radius + 4 * k);
+      separated = _mm256_or_pd(separated, _mm256_cmp_pd(_mm256_and_pd(q, not_sign), r, _CMP_GT_OQ));
     }
     return _mm256_testz_pd(separated, separated);
   }
@@ -262,7 +261,7 @@ struct Avx512 {
   }
 
   [[gnu::target("avx512f")]] static bool child_overlaps(const double* p, const double* offset,
-                                                                           const double* radius) {
+                                                        const double* radius) {
     const __m512d q0 = _mm512_add_pd(_mm512_loadu_pd(p), _mm512_loadu_pd(offset));
     const __m512d q1 = _mm512_add_pd(_mm512_loadu_pd(p + 8), _mm512_loadu_pd(offset + 8));
     return (_mm512_cmp_pd_mask(_mm512_abs_pd(q0), _mm512_loadu_pd(radius), _CMP_GT_OQ) |
@@ -825,10 +824,12 @@ template <class K, class OnLeaf>
 // Every overlapping leaf pair (collide_all), breadth first in batches.
 // Every overlapping pair is visited, so the order of the visits does not
 // change which boxes are tested: the pairs of a level are expanded a batch at
-// a time, their occupied children listed (octant table), tested in one flat
-// loop and the overlapping ones kept, in order, by advancing an index by the
-// test's result (the depth-first walk branched on "any child? how many? back
-// up?" at every pair, and mispredicted most of them). A level's list is
+// a time, their occupied children listed (octant table) and tested in one
+// flat loop whose results are kept as bits, then the overlapping ones taken
+// in order (the depth-first walk branched on "any child? how many? back up?"
+// at every pair, and mispredicted most of them; writing the overlapping ones'
+// indices at a position that depends on each result stalled the loads that
+// follow, so the results are bits first). A level's list is
 // consumed before the next batch of the level above, so memory stays bounded
 // (8 kBatch pairs a level) and the leaf pairs come out in depth-first order,
 // children in octant order. The leaf level is reported, not stored.
