@@ -129,7 +129,10 @@ bool occupied(const ObjectTree& tree, int depth, const BoxCoord& c) {
 // offset[j] (the offsets already scaled to the children's depth: the same
 // bits); bit j of the result is set iff that child overlaps (radius: the two
 // boxes' radii summed lane by lane). Nothing is stored: the descent
-// recomputes the same sums for the children it visits. Three builds: plain
+// recomputes the same sums for the children it visits.
+// half_overlaps<h>(p, offset, radius): one child, projections p + offset, on
+// lanes 8h..8h+7 only (collide_all tests the second half only for children
+// that pass the first). Three builds: plain
 // C++, AVX2 and AVX-512. Each lane is at most one multiplication, one
 // addition, one absolute value and one ordered comparison (no fused
 // multiply-add), so all three give identical bits.
@@ -155,10 +158,13 @@ struct Portable {
     return overlapping;
   }
 
-  // One child (projections p + offset) against radius: do they overlap?
-  [[gnu::always_inline]] static bool child_overlaps(const double* p, const double* offset, const double* radius) {
+  // One child (projections p + offset) against radius on half kHalf of the
+  // lanes, [8 kHalf, 8 kHalf + 8): separated on none of them? A child
+  // overlaps iff it passes both halves.
+  template <int kHalf>
+  [[gnu::always_inline]] static bool half_overlaps(const double* p, const double* offset, const double* radius) {
     bool separated = false;
-    for (int k = 0; k < kLanes; ++k) separated |= std::abs(p[k] + offset[k]) > radius[k];
+    for (int k = 8 * kHalf; k < 8 * kHalf + 8; ++k) separated |= std::abs(p[k] + offset[k]) > radius[k];
     return !separated;
   }
 
@@ -209,12 +215,13 @@ struct Avx2 {
     return overlapping;
   }
 
-  [[gnu::target("avx2")]] static bool child_overlaps(const double* p, const double* offset, const double* radius) {
+  template <int kHalf>
+  [[gnu::target("avx2")]] static bool half_overlaps(const double* p, const double* offset, const double* radius) {
     const __m256d not_sign = _mm256_castsi256_pd(_mm256_set1_epi64x(INT64_MAX));
     __m256d separated = _mm256_setzero_pd();
-    for (int k = 0; k < 4; ++k) {
-      const __m256d q = _mm256_add_pd(_mm256_loadu_pd(p + 4 * k), _mm256_loadu_pd(offset + 4 * k));
-      const __m256d r = _mm256_loadu_pd(radius + 4 * k);
+    for (int k = 8 * kHalf; k < 8 * kHalf + 8; k += 4) {
+      const __m256d q = _mm256_add_pd(_mm256_loadu_pd(p + k), _mm256_loadu_pd(offset + k));
+      const __m256d r = _mm256_loadu_pd(radius + k);
       separated = _mm256_or_pd(separated, _mm256_cmp_pd(_mm256_and_pd(q, not_sign), r, _CMP_GT_OQ));
     }
     return _mm256_testz_pd(separated, separated);
@@ -260,12 +267,11 @@ struct Avx512 {
     return overlapping;
   }
 
-  [[gnu::target("avx512f")]] static bool child_overlaps(const double* p, const double* offset,
-                                                        const double* radius) {
-    const __m512d q0 = _mm512_add_pd(_mm512_loadu_pd(p), _mm512_loadu_pd(offset));
-    const __m512d q1 = _mm512_add_pd(_mm512_loadu_pd(p + 8), _mm512_loadu_pd(offset + 8));
-    return (_mm512_cmp_pd_mask(_mm512_abs_pd(q0), _mm512_loadu_pd(radius), _CMP_GT_OQ) |
-            _mm512_cmp_pd_mask(_mm512_abs_pd(q1), _mm512_loadu_pd(radius + 8), _CMP_GT_OQ)) == 0;
+  template <int kHalf>
+  [[gnu::target("avx512f")]] static bool half_overlaps(const double* p, const double* offset, const double* radius) {
+    const int k = 8 * kHalf;
+    const __m512d q = _mm512_add_pd(_mm512_loadu_pd(p + k), _mm512_loadu_pd(offset + k));
+    return _mm512_cmp_pd_mask(_mm512_abs_pd(q), _mm512_loadu_pd(radius + k), _CMP_GT_OQ) == 0;
   }
 
   [[gnu::target("avx512f")]] static int nearest_order(const double* key, uint32_t hits, uint8_t* order) {
@@ -825,7 +831,8 @@ template <class K, class OnLeaf>
 // Every overlapping pair is visited, so the order of the visits does not
 // change which boxes are tested: the pairs of a level are expanded a batch at
 // a time, their occupied children listed (octant table) and tested in one
-// flat loop whose results are kept as bits, then the overlapping ones taken
+// flat loop whose results are kept as bits (on half of the lanes: see
+// below), then the overlapping ones taken
 // in order (the depth-first walk branched on "any child? how many? back up?"
 // at every pair, and mispredicted most of them; writing the overlapping ones'
 // indices at a position that depends on each result stalled the loads that
@@ -894,22 +901,29 @@ template <class K, class OnLeaf>
     }
     box_tests += uint64_t(n);
     const Lanes* batch = in.p + begin;
-    // Test them: bit c of kept[c / 64] tells whether candidate c overlaps.
-    uint64_t kept[kLevelCap / 64];
+    // Test them on lanes 0..7 (the six face axes and two edge axes): bit c
+    // of near[c / 64] tells whether candidate c passes. Most separated
+    // children fail there (on the bench pairs 62-66% of all candidates fail,
+    // 2-6% more on lanes 8..15), so lanes 8..15 are tested only for those
+    // that pass, as they are taken in order below. A branch, not bits: it
+    // almost always goes the same way, and as bits it was slower (the pass
+    // had to be walked twice or the writes below made to depend on it).
+    uint64_t near[kLevelCap / 64];
     const int words = (n + 63) / 64;
     for (int w = 0; w < words; ++w) {
       uint64_t bits = 0;
       for (int c = 64 * w, last = std::min(n, c + 64); c < last; ++c)
-        bits |= uint64_t(K::child_overlaps(batch[parent[c]], lv.offset[octant[c]], lv.radius)) << (c & 63);
-      kept[w] = bits;
+        bits |= uint64_t(K::template half_overlaps<0>(batch[parent[c]], lv.offset[octant[c]], lv.radius)) << (c & 63);
+      near[w] = bits;
     }
     // The overlapping ones, in order: leaf pairs reported, others listed.
     const bool leaves = l + 1 == levels;
     SweepLevel& out = list[leaves ? l : l + 1];
     int m = 0;
     for (int w = 0; w < words; ++w)
-      for (uint64_t bits = kept[w]; bits != 0; bits &= bits - 1) {
+      for (uint64_t bits = near[w]; bits != 0; bits &= bits - 1) {
         const int c = 64 * w + std::countr_zero(bits);
+        if (!K::template half_overlaps<1>(batch[parent[c]], lv.offset[octant[c]], lv.radius)) continue;
         const int i = begin + parent[c];
         const uint8_t j = octant[c];
         const Packed grown = child_of(in.coord[i][side], j);
