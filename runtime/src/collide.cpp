@@ -969,12 +969,12 @@ struct Job {
   std::vector<LeafPair>* all;
 };
 
-template <class K>
+template <class K, bool kAll>
 [[gnu::always_inline]] inline PairTest run_pair(const Job& job) {
   const Canonical& pair = job.pair;
   const PairFrame<K> frame(pair.first, pair.second);
   PairTest result;
-  if (job.all) {
+  if constexpr (kAll) {
     sweep_all(frame, result,
               [&](const Coord& ca, const Coord& cb) { job.all->push_back(pair.to_caller(ca, cb)); });
     return result;
@@ -996,20 +996,32 @@ template <class K>
   return result;
 }
 
+// One function per kernel build and per kind of test, so that neither
+// descent's code is laid out around the other's.
 using Runner = PairTest (*)(const Job&);
-PairTest run_portable(const Job& job) { return run_pair<Portable>(job); }
+template <bool kAll>
+PairTest run_portable(const Job& job) {
+  return run_pair<Portable, kAll>(job);
+}
 #ifdef OCTBAKE_X86_KERNELS
-[[gnu::target("avx2"), gnu::flatten]] PairTest run_avx2(const Job& job) { return run_pair<Avx2>(job); }
-[[gnu::target("avx512f"), gnu::flatten]] PairTest run_avx512(const Job& job) { return run_pair<Avx512>(job); }
+template <bool kAll>
+[[gnu::target("avx2"), gnu::flatten]] PairTest run_avx2(const Job& job) {
+  return run_pair<Avx2, kAll>(job);
+}
+template <bool kAll>
+[[gnu::target("avx512f"), gnu::flatten]] PairTest run_avx512(const Job& job) {
+  return run_pair<Avx512, kAll>(job);
+}
 #endif
 
+template <bool kAll>
 Runner runner_of(BoxKernel k) {
 #ifdef OCTBAKE_X86_KERNELS
-  if (k == BoxKernel::avx512) return run_avx512;
-  if (k == BoxKernel::avx2) return run_avx2;
+  if (k == BoxKernel::avx512) return run_avx512<kAll>;
+  if (k == BoxKernel::avx2) return run_avx2<kAll>;
 #endif
   (void)k;
-  return run_portable;
+  return run_portable<kAll>;
 }
 
 PairTest run(const PlacedTree& a, const PlacedTree& b, const LeafPair* hint, std::vector<LeafPair>* all) {
@@ -1020,7 +1032,8 @@ PairTest run(const PlacedTree& a, const PlacedTree& b, const LeafPair* hint, std
                                                            : BoxKernel::portable;
   const BoxKernel k = chosen_kernel.load(std::memory_order_relaxed);
   const Canonical pair(a, b);
-  return runner_of(k == BoxKernel::best ? best : k)(Job{pair, hint, all});
+  const BoxKernel use = k == BoxKernel::best ? best : k;
+  return (all ? runner_of<true>(use) : runner_of<false>(use))(Job{pair, hint, all});
 }
 
 }  // namespace
