@@ -130,12 +130,14 @@ bool occupied(const ObjectTree& tree, int depth, const BoxCoord& c) {
 // bits); bit j of the result is set iff that child overlaps (radius: the two
 // boxes' radii summed lane by lane). Nothing is stored: the descent
 // recomputes the same sums for the children it visits.
+//
 // half_overlaps<h>(p, offset, radius): one child, projections p + offset, on
 // lanes 8h..8h+7 only (collide_all tests the second half only for children
-// that pass the first). Three builds: plain
-// C++, AVX2 and AVX-512. Each lane is at most one multiplication, one
-// addition, one absolute value and one ordered comparison (no fused
-// multiply-add), so all three give identical bits.
+// that pass the first).
+//
+// Three builds: plain C++, AVX2 and AVX-512. Each lane is at most one
+// multiplication, one addition, one absolute value and one ordered
+// comparison (no fused multiply-add), so all three give identical bits.
 //
 // Each build is a class whose kernel is inlined into the whole pair test,
 // which is compiled once per build and chosen once per pair (run_pair): no
@@ -903,9 +905,9 @@ template <class K, class OnLeaf>
     const Lanes* batch = in.p + begin;
     // Test them on lanes 0..7 (the six face axes and two edge axes): bit c
     // of near[c / 64] tells whether candidate c passes. Most separated
-    // children fail there (on the bench pairs 62-66% of all candidates fail,
-    // 2-6% more on lanes 8..15), so lanes 8..15 are tested only for those
-    // that pass, as they are taken in order below. A branch, not bits: it
+    // children fail there (on the spider-duck 6-6 pairs 62-66% of all
+    // candidates fail, 0-2% more on lanes 8..15), so lanes 8..15 are tested
+    // only for those that pass, as they are taken in order below. A branch, not bits: it
     // almost always goes the same way, and as bits it was slower (the pass
     // had to be walked twice or the writes below made to depend on it).
     uint64_t near[kLevelCap / 64];

@@ -26,12 +26,12 @@
 // box pairs it tests: it expands the same pairs (the same split schedule, every
 // overlapping child) breadth first, a batch of up to 32 pairs of a level at a
 // time: their occupied children are listed, tested in one flat loop without
-// branching on the results (on lanes 0..7; the few that pass are tested on
-// lanes 8..15 as they are taken in order), and the overlapping ones become the
-// next level's batch. A level's pairs are all expanded before the next batch of the level
-// above, so memory stays bounded (at most 256 pairs a level, kept per thread
-// between calls) and leaf pairs come out in depth-first order, children in
-// octant order. Its box_tests are those of a depth-first walk over the same
+// branching on the results (on lanes 0..7; those that pass are tested on
+// lanes 8..15 as they are taken in order), and the overlapping ones become
+// the next level's batch. A level's pairs are all expanded before the next
+// batch of the level above, so memory stays bounded (at most 256 pairs a
+// level, kept per thread between calls) and leaf pairs come out in
+// depth-first order, children in octant order. Its box_tests are those of a depth-first walk over the same
 // pairs.
 //
 // Box tests at memory speed. The 8 children of a box share its axes and sit at
