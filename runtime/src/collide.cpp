@@ -89,10 +89,19 @@ struct Relative {
     s = b.pose.scale / a.pose.scale;
     // Subtract first: equal world offsets (1e7) cancel before any product.
     const Eigen::Vector3d dp = b.pose.position - a.pose.position;
-    r = ra.transpose() * rb;
-    sr = s * r;
-    t = ra.transpose() * dp / a.pose.scale;
-    abs_r = r.cwiseAbs().array() + kAxisPad;
+    // R = Ra^T Rb, t = Ra^T dp / scale, coefficient by coefficient (the sums
+    // in Eigen's order): Eigen's vectorised products read the matrices back
+    // as pairs just after they were written one value at a time, and waited
+    // for the stores.
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) {
+        const double v = (ra(0, i) * rb(0, j) + ra(1, i) * rb(1, j)) + ra(2, i) * rb(2, j);
+        r(i, j) = v;
+        sr(i, j) = s * v;
+        abs_r(i, j) = std::abs(v) + kAxisPad;
+      }
+      t[i] = ((ra(0, i) * dp[0] + ra(1, i) * dp[1]) + ra(2, i) * dp[2]) / a.pose.scale;
+    }
     const Aabb& ba = a.tree->bounds();
     const Aabb& bb = b.tree->bounds();
     const double mag_a = std::max(ba.min.cwiseAbs().maxCoeff(), ba.max.cwiseAbs().maxCoeff());
@@ -329,6 +338,14 @@ using v4d_mem = double __attribute__((vector_size(32), aligned(8), may_alias));
   }
 }
 
+// {a, b, c, 0} built in registers (as v4d{a, b, c, 0}, GCC wrote the four
+// to the stack and read them back as one vector, which waits for the stores).
+[[gnu::always_inline]] inline void make4(v4d& out, double a, double b, double c) {
+  using v2d = double __attribute__((vector_size(16)));
+  const v2d lo = {a, b}, hi = {c, 0};
+  out = __builtin_shufflevector(lo, hi, 0, 1, 2, 3);
+}
+
 // 16 lanes from five groups of three (lanes 0..2 of g0..g4), lane 15 zero:
 // four aligned stores (one load of a lane chunk then finds one store).
 [[gnu::always_inline]] inline void store_groups(double* out, const v4d& g0, const v4d& g1, const v4d& g2,
@@ -409,9 +426,9 @@ class PairFrame {
     // columns of |R| (|R| padded; lane 3 zero) in groups of three lanes.
     v4d rr[3], ar[3], ac[3];
     for (int m = 0; m < 3; ++m) {
-      rr[m] = v4d{r(m, 0), r(m, 1), r(m, 2), 0};
-      ar[m] = v4d{abs_r(m, 0), abs_r(m, 1), abs_r(m, 2), 0};
-      ac[m] = v4d{abs_r(0, m), abs_r(1, m), abs_r(2, m), 0};
+      make4(rr[m], r(m, 0), r(m, 1), r(m, 2));
+      make4(ar[m], abs_r(m, 0), abs_r(m, 1), abs_r(m, 2));
+      make4(ac[m], abs_r(0, m), abs_r(1, m), abs_r(2, m));
     }
     // t_.w[m]: weight of t_m in each projection: e_m on A's faces, row m of R
     // on B's, and on A_i x B_j (t_i2 r_i1j - t_i1 r_i2j) row i1 where m = i2,
