@@ -3,13 +3,16 @@
 //      depth, screen LOD at 1 px) against FCL's DynamicAABBTree broadphase
 //      (setTransform + update) + exact OBBRSS BVH mesh test, both fed the same
 //      precomputed poses, with octbake's recall and precision against that
-//      exact answer;
+//      exact answer; and "paired": the same three run back to back in a
+//      rotating order, octbake over FCL per repetition, so that a busy spell
+//      of a shared host slows both sides of a ratio;
 //  (b) per frame over the same candidate pairs (world boxes overlap):
 //      octbake collide() at depth D against FCL OcTree-OcTree collision of
 //      octomaps holding the same leaf boxes at depth D, precision of both;
 //  (c) start-up: ModelLibrary loading the baked trees against building FCL
 //      BVHs from the (already imported) meshes.
-// Ratios are printed at the end from the best repetition of each case.
+// Ratios are printed at the end from the best repetition of each case, the
+// paired ones as a median and range over the repetitions.
 //
 // Build with -DOCTBAKE_BENCH=ON, then from the source root:
 //   build/tests/bench_fcl --benchmark_repetitions=3 [--scene=PATH ...] [--meshes=DIR] [--frames=N] [--csv=FILE]
