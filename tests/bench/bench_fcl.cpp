@@ -555,16 +555,19 @@ class Collector : public benchmark::ConsoleReporter {
   void ReportRuns(const std::vector<Run>& runs) override {
     for (const Run& r : runs) {
       if (r.error_occurred) continue;
-      // Each repetition, or with --benchmark_report_aggregates_only their
-      // "min" (the best repetition's time; the ratios' range instead).
-      const bool repetition = r.run_type == Run::RT_Iteration;
-      if (!repetition && r.aggregate_name != "min") continue;
       const std::string& name = r.run_name.function_name;
-      const double t = r.GetAdjustedRealTime();  // in the benchmark's unit (us)
-      auto [it, fresh] = best_.try_emplace(name, t);
-      if (!fresh) it->second = std::min(it->second, t);
-      for (const auto& [counter, value] : r.counters)
-        if (counter.ends_with("_over_fcl")) ratios_[name + "/" + counter].push_back(value.value);
+      if (r.run_type == Run::RT_Iteration) {
+        keep_best(name, r.GetAdjustedRealTime());  // in the benchmark's unit (us)
+        for (const auto& [counter, value] : r.counters)
+          if (counter.ends_with("_over_fcl")) ratios_[name + "/" + counter].push_back(value.value);
+      } else {
+        // With --benchmark_report_aggregates_only only these arrive: the
+        // best time from "min", the ratios' median and range from "median",
+        // "min" and "max" (used only where no repetition was seen).
+        if (r.aggregate_name == "min") keep_best(name, r.GetAdjustedRealTime());
+        for (const auto& [counter, value] : r.counters)
+          if (counter.ends_with("_over_fcl")) aggregates_[name + "/" + counter][r.aggregate_name] = value.value;
+      }
     }
     ConsoleReporter::ReportRuns(runs);
   }
@@ -574,17 +577,27 @@ class Collector : public benchmark::ConsoleReporter {
   }
   // A paired ratio over the repetitions: median, min and max (nan if not run).
   std::array<double, 3> ratio(const std::string& name) const {
-    auto it = ratios_.find(name);
-    if (it == ratios_.end()) return {NAN, NAN, NAN};
-    std::vector<double> v = it->second;
-    std::sort(v.begin(), v.end());
-    const size_t n = v.size();
-    return {n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]), v.front(), v.back()};
+    if (auto it = ratios_.find(name); it != ratios_.end()) {
+      std::vector<double> v = it->second;
+      std::sort(v.begin(), v.end());
+      const size_t n = v.size();
+      return {n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]), v.front(), v.back()};
+    }
+    const auto it = aggregates_.find(name);
+    if (it == aggregates_.end()) return {NAN, NAN, NAN};
+    const auto get = [&](const char* a) { return it->second.contains(a) ? it->second.at(a) : NAN; };
+    return {get("median"), get("min"), get("max")};
   }
 
  private:
+  void keep_best(const std::string& name, double t) {
+    auto [it, fresh] = best_.try_emplace(name, t);
+    if (!fresh) it->second = std::min(it->second, t);
+  }
+
   std::map<std::string, double> best_;
-  std::map<std::string, std::vector<double>> ratios_;
+  std::map<std::string, std::vector<double>> ratios_;                    // per repetition
+  std::map<std::string, std::map<std::string, double>> aggregates_;     // by aggregate name
 };
 
 }  // namespace
@@ -638,7 +651,8 @@ int main(int argc, char** argv) {
           ->UseManualTime()
           ->Iterations(3)
           ->Unit(benchmark::kMicrosecond)
-          ->ComputeStatistics("min", [](const std::vector<double>& v) { return *std::min_element(v.begin(), v.end()); });
+          ->ComputeStatistics("min", [](const std::vector<double>& v) { return *std::min_element(v.begin(), v.end()); })
+          ->ComputeStatistics("max", [](const std::vector<double>& v) { return *std::max_element(v.begin(), v.end()); });
     };
     const LodSettings fixed{LodPolicy::fixed, b->depth, b->depth, 1.0}, screen{LodPolicy::screen, 1, b->depth, 1.0};
     const std::string fixed_name = s + "/a_frame/octbake_fixed" + std::to_string(b->depth);
