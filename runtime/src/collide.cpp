@@ -1074,6 +1074,52 @@ PairTest collide(const PlacedTree& a, const PlacedTree& b, PairCache& cache) {
   return result;
 }
 
+PlacedRoot placed_root(const ObjectTree& tree, const Pose& pose) {
+  Pose at_origin = pose;
+  at_origin.position.setZero();
+  const Aabb& b = tree.bounds();
+  return {place(b, at_origin), pose.scale * std::max(b.min.cwiseAbs().maxCoeff(), b.max.cwiseAbs().maxCoeff())};
+}
+
+bool roots_apart(const PlacedRoot& a, const Eigen::Vector3d& pa, const PlacedRoot& b, const Eigen::Vector3d& pb) {
+  // In a's axes: the centre offset t and b's axes (columns of R), world units.
+  // Written out: Eigen's 3x3 products stored and reloaded their results.
+  const Eigen::Matrix3d &ea = a.box.axes, &eb = b.box.axes;
+  const Eigen::Vector3d &ha = a.box.half, &hb = b.box.half;
+  const Eigen::Vector3d dp = pb - pa;  // the subtraction collide() starts from
+  const Eigen::Vector3d d = dp + (b.box.center - a.box.center);
+  double t[3], r[3][3], abs_r[3][3];
+  for (int i = 0; i < 3; ++i) {
+    t[i] = (ea(0, i) * d[0] + ea(1, i) * d[1]) + ea(2, i) * d[2];
+    for (int j = 0; j < 3; ++j) {
+      r[i][j] = (ea(0, i) * eb(0, j) + ea(1, i) * eb(1, j)) + ea(2, i) * eb(2, j);
+      abs_r[i][j] = std::abs(r[i][j]);
+    }
+  }
+  // collide()'s padding in world units, for either argument order: half
+  // extents grow by pad = kRelPad (reaches + offset), so each face radius by
+  // at most 4 pad + kAxisPad (the other's half extents summed). Twice that
+  // plus rounding (~1e-15 of the same magnitudes) is the margin; the 1-norms
+  // bound the 2-norms collide() meets.
+  const double magnitude = a.reach + b.reach + dp.cwiseAbs().sum() + d.cwiseAbs().sum();
+  const double margin = 10 * kRelPad * magnitude + 2 * kAxisPad * (ha.sum() + hb.sum());
+  for (int i = 0; i < 3; ++i)
+    if (std::abs(t[i]) > ha[i] + (abs_r[i][0] * hb[0] + abs_r[i][1] * hb[1] + abs_r[i][2] * hb[2]) + margin)
+      return true;
+  for (int j = 0; j < 3; ++j) {
+    const double tb = (r[0][j] * t[0] + r[1][j] * t[1]) + r[2][j] * t[2];  // t on b's axis j
+    if (std::abs(tb) > hb[j] + (abs_r[0][j] * ha[0] + abs_r[1][j] * ha[1] + abs_r[2][j] * ha[2]) + margin)
+      return true;
+  }
+  return false;
+}
+
+bool roots_apart(const PlacedTree& a, const PlacedTree& b) {
+  check(a);
+  check(b);
+  return roots_apart(placed_root(*a.tree, a.pose), a.pose.position, placed_root(*b.tree, b.pose), b.pose.position);
+}
+
 OrientedBox leaf_box(const PlacedTree& p, const BoxCoord& c) {
   return place(p.tree->masks().box_bounds(p.depth, c), p.pose);
 }

@@ -164,6 +164,23 @@ void BM_Pair(benchmark::State& state) {
   state.SetLabel(std::string(impl == 0 ? "new " : "reference ") + kPoseNames[kind]);
 }
 
+// roots_apart on the same poses, from PlacedRoots worked out beforehand (as
+// CollisionWorld keeps them): the shortcut detect() takes before a pair's
+// depths, to set against BM_Pair at 0-0 (collide()'s root test).
+void BM_RootsApart(benchmark::State& state) {
+  const auto [a, b] = spider_duck_case(int(state.range(0)), 0, 0);
+  const PlacedRoot ra = placed_root(*a.tree, a.pose), rb = placed_root(*b.tree, b.pose);
+  bool apart = false;
+  for (auto _ : state) {
+    apart = roots_apart(ra, a.pose.position, rb, b.pose.position);
+    benchmark::DoNotOptimize(apart);
+  }
+  state.counters["apart"] = apart;
+  state.counters["us_per_call"] =
+      benchmark::Counter(double(state.iterations()), benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.SetLabel(kPoseNames[state.range(0)]);
+}
+
 // 0-0 (one box test: the roots) is the cost of a call's set-up.
 void pair_args(benchmark::internal::Benchmark* b) {
   for (int kind = 0; kind < 6; ++kind)
@@ -266,6 +283,7 @@ void BM_Coherent(benchmark::State& state) {
 // Best of N (run with --benchmark_repetitions=N): the least disturbed run.
 auto best_of = [](const std::vector<double>& v) { return *std::min_element(v.begin(), v.end()); };
 BENCHMARK(BM_Pair)->Apply(pair_args)->ComputeStatistics("min", best_of);
+BENCHMARK(BM_RootsApart)->DenseRange(0, 5)->ComputeStatistics("min", best_of);
 BENCHMARK(BM_Thesis)->ArgsProduct({{0, 1}, {0, 1, 2}})->ComputeStatistics("min", best_of);
 BENCHMARK(BM_All)->ArgsProduct({{0, 1}, {0, 1}})->ComputeStatistics("min", best_of);
 BENCHMARK(BM_Coherent)->Arg(0)->Arg(1)->ComputeStatistics("min", best_of);

@@ -126,6 +126,25 @@ OCTBAKE_API PairTest collide(const PlacedTree& a, const PlacedTree& b);
 // box_tests and leaf may differ (another overlapping leaf pair may prove it).
 OCTBAKE_API PairTest collide(const PlacedTree& a, const PlacedTree& b, PairCache& cache);
 
+// A tree's root box under a pose, apart from the pose's position: what
+// roots_apart reads, worked out once per rotation and scale (CollisionWorld
+// keeps one per object).
+struct PlacedRoot {
+  OrientedBox box;   // place(tree bounds, pose) with the position left out
+  double reach = 0;  // scale times the largest |coordinate| of the tree's bounds
+};
+OCTBAKE_API PlacedRoot placed_root(const ObjectTree& tree, const Pose& pose);
+
+// Are the root boxes of a and b (at positions pa, pb) apart on one of their
+// six face axes by more than collide()'s padding and rounding? Then collide()
+// of the two trees at these poses, with an empty cache, is a miss after its
+// one root box test at any depths: a caller that picks the depths first can
+// skip them. A fraction of that test's set-up; false says nothing.
+OCTBAKE_API bool roots_apart(const PlacedRoot& a, const Eigen::Vector3d& pa, const PlacedRoot& b,
+                             const Eigen::Vector3d& pb);
+// The same for two placed trees (their depths are not read).
+OCTBAKE_API bool roots_apart(const PlacedTree& a, const PlacedTree& b);
+
 // Every overlapping leaf pair (no early out), for response and debugging.
 OCTBAKE_API PairTest collide_all(const PlacedTree& a, const PlacedTree& b, std::vector<LeafPair>& out);
 

@@ -118,9 +118,10 @@ class OCTBAKE_API ThreadPool final : public Executor {
 // When pixel areas (hence depths) are recomputed.
 enum class AreaRefresh {
   // Default. An object's area is recomputed when it is needed (it is in a
-  // tested pair, or a query reaches it) and its pose, the camera or the LOD
+  // candidate pair whose root boxes are not apart, see detect(); a query
+  // reaches it; depth() or area() asks) and its pose, the camera or the LOD
   // settings changed since it was last computed. With the fixed and screen
-  // policies only objects in tested pairs are computed, and screen skips the
+  // policies only those objects are computed, and screen skips the
   // exact area when pixel_area_lower_bound already gives the deepest depth
   // (not counted in area_computations); thesis needs every
   // area (its A_min and A_max are global): when anything changed, every live
@@ -247,7 +248,10 @@ class OCTBAKE_API CollisionWorld {
   //  1. the WorldTree follows the poses set since the last detect();
   //  2. candidate pairs: objects sharing a WorldTree cell whose world AABBs
   //     (padded by 1e-9 relative, never rejecting a touching pair) overlap;
-  //  3. depths: the pixel area of every object in a candidate pair (see
+  //     a pair with no cached leaf pair whose root boxes are apart
+  //     (roots_apart) is a miss after one box test, as collide() would find
+  //     at any depths, and needs neither depth nor streamed level;
+  //  3. depths: the pixel area of every object in another candidate pair (see
   //     AreaRefresh) and choose_depths, each object's max depth being its
   //     tree's loaded (fixed) or baked (streamed) depth;
   //  4. streamed trees: LevelCache::require for every streamed tree used this
@@ -364,7 +368,7 @@ class OCTBAKE_API CollisionWorld {
   const ObjectTree& tree_of(const Slot& s) const;
   int max_depth_of(const Slot& s) const;
   void place_box(uint32_t slot);  // boxes_[slot] from the slot's pose and offset
-  void set_offset(Slot& s);       // s.offset and s.offset_reach from its tree, rotation and scale
+  void set_offset(uint32_t i);    // roots_[i], offset and offset_reach from slot i's tree, rotation and scale
   // Sets live slot i to a checked pose that differs from its own; true when
   // the slot just became dirty (the caller lists it in dirty_).
   bool move_to(uint32_t i, const Pose& pose, bool same_frame);  // same_frame: rotation and scale unchanged
@@ -377,6 +381,7 @@ class OCTBAKE_API CollisionWorld {
   PlacedTree placed(uint32_t i) const;
   void run_parallel(size_t count, size_t grain, RangeTask task);
   void collect_pairs();  // pairs_: the WorldTree's overlapping pairs, sorted
+  void find_apart(size_t begin, size_t end);  // results_[k].apart
   void test_pairs(size_t begin, size_t end);
   // Queries: the nearest leaf of slot i entered within `limit` past t_box
   // (local distance and box); does slot i have a leaf overlapping the box
@@ -399,6 +404,7 @@ class OCTBAKE_API CollisionWorld {
   WorldTree tree_;
   std::vector<Slot> slots_;
   std::vector<Aabb> boxes_;  // per slot: world AABB (offset + position, padded); hot in the pair loop
+  std::vector<PlacedRoot> roots_;  // per slot: the root box less the position (roots_apart)
   std::vector<uint32_t> free_slots_;  // reused LIFO
   std::vector<uint32_t> dirty_;       // slots whose WorldTree entry is stale, each once
   size_t live_ = 0;
@@ -413,6 +419,7 @@ class OCTBAKE_API CollisionWorld {
     PairTest test;
     PairCache cache;  // in: the last frame's proving leaf pair; out: this frame's
     ContactEstimate estimate;  // with test.hit
+    bool apart = false;  // roots_apart, with an empty cache: test is one box test, a miss
   };
   std::vector<std::pair<uint32_t, uint32_t>> pair_room_, spilled_pairs_;  // collect_pairs: the scan's room, overflow
   std::vector<uint32_t> stale_;  // objects in pairs whose depth is stale

@@ -289,5 +289,60 @@ TEST(Collide, AllLeafPairsMatchBruteForce) {
   EXPECT_LT(hits, runs * 7 / 10);
 }
 
+// roots_apart is a safe shortcut: whenever it says apart, collide() ends at
+// its root test with a miss at every depth pair, in both argument orders, and
+// the unpadded root boxes are disjoint (independent test). Poses put the
+// roots at gaps from -1e-3 to +1e-3 of their size along a face axis (the
+// knife edge included), with sizes 1e-3..1e3 apart, at the origin and 1e7.
+TEST(Collide, RootsApartOnlyWhereCollideMissesAtItsRoot) {
+  std::mt19937 rng(17);
+  int apart = 0, knife_edge = 0, clear = 0, runs = 0;
+  for (int run = 0; run < 4000; ++run) {
+    const int depth_a = int(rng() % 4), depth_b = int(rng() % 4);
+    const ObjectTree ta = random_tree(rng, depth_a), tb = random_tree(rng, depth_b);
+    const double offset = run % 3 == 0 ? 1e7 : 0;
+    const Eigen::Quaterniond qa = run % 4 == 0 ? Eigen::Quaterniond::Identity() : random_rotation(rng);
+    const Eigen::Quaterniond qb = run % 4 == 1 ? qa : random_rotation(rng);
+    const double sa = std::pow(10.0, -3 + 6 * uniform01(rng)), sb = sa * std::pow(10.0, -2.6 + 5.2 * uniform01(rng));
+    PlacedTree a{&ta, at(Eigen::Vector3d::Constant(offset), qa, sa), depth_a};
+    PlacedTree b{&tb, at(Eigen::Vector3d::Zero(), qb, sb), depth_b};
+    // b's root just beyond (or just into) a's root along a's face axis `axis`.
+    const OrientedBox ra = place(ta.bounds(), a.pose), rb0 = place(tb.bounds(), b.pose);
+    const int axis = int(rng() % 3);
+    const Eigen::Vector3d n = ra.axes.col(axis) * (rng() % 2 ? 1.0 : -1.0);
+    const double reach_b = (rb0.axes.transpose() * n).cwiseAbs().dot(rb0.half);
+    const double size = ra.half.maxCoeff() + rb0.half.maxCoeff();
+    const double gaps[] = {1e-3, 1e-7, 1e-10, 1e-13, 0, -1e-13, -1e-10, -1e-3};
+    const double gap = gaps[rng() % 8] * size;
+    b.pose.position = ra.center + n * (ra.half[axis] + reach_b + gap) - rb0.center +
+                      0.3 * size * (uniform01(rng) - 0.5) * ra.axes.col((axis + 1) % 3);
+    const bool roots_miss = !collide({&ta, a.pose, 0}, {&tb, b.pose, 0}).hit;
+    if (roots_apart(a, b)) {
+      ++apart;
+      // Independently, relative to a's position (corners at 1e7 would round
+      // more than the smallest gaps).
+      const Pose rel_a = at(Eigen::Vector3d::Zero(), qa, sa), rel_b = at(b.pose.position - a.pose.position, qb, sb);
+      EXPECT_FALSE(boxes_overlap(world_box(place(ta.bounds(), rel_a)), world_box(place(tb.bounds(), rel_b))))
+          << "run " << run << " gap " << gap / size;
+      for (int da = 0; da <= depth_a; ++da)
+        for (int db = 0; db <= depth_b; ++db) {
+          const PlacedTree pa{&ta, a.pose, da}, pb{&tb, b.pose, db};
+          const PairTest ab = collide(pa, pb), ba = collide(pb, pa);
+          ASSERT_TRUE(!ab.hit && ab.box_tests == 1 && !ba.hit && ba.box_tests == 1) << "run " << run;
+        }
+    } else {
+      knife_edge += roots_miss;
+      // A clear gap (a thousandth of the sizes) is always found.
+      if (gap >= 1e-3 * size) ++clear, ADD_FAILURE() << "run " << run << ": a gap of " << gap << " not found";
+    }
+    ++runs;
+  }
+  // Not vacuous: most gaps are found, and collide() misses some roots that
+  // roots_apart leaves to it (the gap within its margin).
+  EXPECT_GT(apart, runs / 3);
+  EXPECT_GT(knife_edge, 0);
+  EXPECT_EQ(clear, 0);
+}
+
 }  // namespace
 }  // namespace octbake

@@ -20,7 +20,7 @@ using test::kWork;
 using test::uniform;
 
 struct Totals {
-  uint64_t frames = 0, pair_tests = 0, contacts = 0, far_contacts = 0, outside_contacts = 0;
+  uint64_t frames = 0, pair_tests = 0, contacts = 0, far_contacts = 0, outside_contacts = 0, skipped_depths = 0;
   uint64_t hash = 1469598103934665603ull;
   template <class T>
   void mix(const T& v) {
@@ -128,15 +128,18 @@ class Driver {
     std::sort(sorted.begin(), sorted.end(), [](auto x, auto y) { return x.slot < y.slot; });
     ASSERT_EQ(stats.objects, sorted.size());
 
-    // Depths of the objects in candidate pairs (world AABBs overlap) are
-    // choose_depths over fresh pixel areas, read before anything refreshes.
-    std::set<uint32_t> in_pairs;
+    // Depths of the objects in candidate pairs (world AABBs overlap) whose
+    // root boxes are not apart are choose_depths over fresh pixel areas, read
+    // before anything refreshes (a pair whose roots are apart may skip them).
+    std::set<uint32_t> in_pairs, needed;
     uint64_t candidates = 0;
     for (size_t i = 0; i < sorted.size(); ++i)
       for (size_t j = i + 1; j < sorted.size(); ++j) {
         const Aabb &a = world_->bounds(sorted[i]), &b = world_->bounds(sorted[j]);
-        if ((a.min.array() <= b.max.array()).all() && (b.min.array() <= a.max.array()).all())
-          in_pairs.insert(sorted[i].slot), in_pairs.insert(sorted[j].slot), ++candidates;
+        if (!((a.min.array() <= b.max.array()).all() && (b.min.array() <= a.max.array()).all())) continue;
+        in_pairs.insert(sorted[i].slot), in_pairs.insert(sorted[j].slot), ++candidates;
+        if (!roots_apart(placed(sorted[i], 0), placed(sorted[j], 0)))
+          needed.insert(sorted[i].slot), needed.insert(sorted[j].slot);
       }
     ASSERT_EQ(stats.candidate_pairs, candidates);
     const LodSettings& lod = world_->lod();
@@ -148,9 +151,10 @@ class Driver {
     }
     const std::vector<int> expected = choose_depths(lod, areas, max_depths);
     for (size_t i = 0; i < sorted.size(); ++i)
-      if (in_pairs.count(sorted[i].slot)) {
+      if (needed.count(sorted[i].slot)) {
         ASSERT_EQ(world_->cached_depth(sorted[i]), expected[i]) << "slot " << sorted[i].slot;
       }
+    totals.skipped_depths += in_pairs.size() - needed.size();
     if (lod.policy == LodPolicy::fixed) {
       EXPECT_EQ(stats.area_computations, 0u);
     } else if (lod.policy == LodPolicy::screen) {
@@ -159,14 +163,21 @@ class Driver {
       EXPECT_LE(stats.area_computations, sorted.size());
     }
 
-    // Contacts: collide() on every live pair at the chosen depths.
+    // Contacts: collide() on every live pair at the chosen depths; without
+    // coherence, the box tests of the candidate pairs too.
     std::vector<std::tuple<uint32_t, uint32_t, int, int, uint64_t>> want, got;
+    uint64_t box_tests = 0;
     for (size_t i = 0; i < sorted.size(); ++i)
       for (size_t j = i + 1; j < sorted.size(); ++j) {
         const int da = world_->depth(sorted[i]).value(), db = world_->depth(sorted[j]).value();
         const PairTest t = collide(placed(sorted[i], da), placed(sorted[j], db));
         if (t.hit) want.emplace_back(sorted[i].slot, sorted[j].slot, da, db, coherence_ ? 0 : t.box_tests);
+        const Aabb &a = world_->bounds(sorted[i]), &b = world_->bounds(sorted[j]);
+        if ((a.min.array() <= b.max.array()).all() && (b.min.array() <= a.max.array()).all()) box_tests += t.box_tests;
       }
+    if (!coherence_) {
+      EXPECT_EQ(stats.box_tests, box_tests) << "frame " << totals.frames;
+    }
     for (const Contact& c : contacts_) {
       got.emplace_back(c.a.slot, c.b.slot, c.depth_a, c.depth_b, coherence_ ? 0 : c.box_tests);
       ASSERT_TRUE(world_->alive(c.a) && world_->alive(c.b));
@@ -215,10 +226,11 @@ TEST(CollisionWorldOracle, RandomCallsGiveBruteForceContactsEveryFrame) {
   EXPECT_LT(rate, 0.7);
   EXPECT_GT(totals.far_contacts, 0u);
   EXPECT_GT(totals.outside_contacts, 0u);
-  std::printf("frames %llu, pair tests %llu, contacts %llu (far %llu, outside %llu)\n",
+  EXPECT_GT(totals.skipped_depths, 0u);  // objects only in pairs whose roots are apart
+  std::printf("frames %llu, pair tests %llu, contacts %llu (far %llu, outside %llu), depths not needed %llu\n",
               (unsigned long long)totals.frames, (unsigned long long)totals.pair_tests,
               (unsigned long long)totals.contacts, (unsigned long long)totals.far_contacts,
-              (unsigned long long)totals.outside_contacts);
+              (unsigned long long)totals.outside_contacts, (unsigned long long)totals.skipped_depths);
 }
 
 TEST(CollisionWorldOracle, BitIdenticalAcrossRepeatsThreadCountsAndExecutors) {
@@ -264,6 +276,65 @@ TEST(CollisionWorldOracle, ThreadPoolCoversEveryItemOnce) {
       for (size_t i = 0; i < count; ++i) ASSERT_EQ(seen[i].load(), 1) << threads << " threads, item " << i;
     }
   }
+}
+
+}  // namespace
+}  // namespace octbake
+
+namespace octbake {
+namespace {
+
+// The overlap of two oriented boxes along one unit axis.
+double overlap_along(const OrientedBox& a, const OrientedBox& b, const Eigen::Vector3d& n) {
+  const double ra = (a.axes.transpose() * n).cwiseAbs().dot(a.half);
+  const double rb = (b.axes.transpose() * n).cwiseAbs().dot(b.half);
+  return ra + rb - std::abs((b.center - a.center).dot(n));
+}
+
+// estimate_contact against the independent separating axis test: the axis it
+// names is one of least overlap, points from a to b, and that overlap is the
+// penetration; on boxes from thin to wide, axis-aligned, nearly parallel and
+// rotated, at the origin and at 1e6.
+TEST(EstimateContact, NamesTheAxisOfLeastOverlapOfAnIndependentSat) {
+  std::mt19937 rng(11);
+  int overlapping = 0, edge_axes = 0;
+  for (int k = 0; k < 20000 * kWork / 10; ++k) {
+    const double offset = k % 2 ? 1e6 : 0;
+    OrientedBox a, b;
+    a.center = Eigen::Vector3d::Constant(offset) + test::random_point(rng, -1, 1);
+    b.center = a.center + test::random_point(rng, -3, 3);
+    for (int i = 0; i < 3; ++i) {
+      a.half[i] = below(rng, 8) == 0 ? 0.0 : uniform(rng, 1e-3, 2);
+      b.half[i] = below(rng, 8) == 0 ? 0.0 : uniform(rng, 1e-3, 2);
+    }
+    const Eigen::Quaterniond qa = below(rng, 4) == 0 ? Eigen::Quaterniond::Identity() : test::random_rotation(rng);
+    const int kind = below(rng, 3);  // b: aligned with a, almost aligned, rotated
+    const Eigen::Quaterniond qb = kind == 0   ? qa
+                                  : kind == 1 ? qa * Eigen::Quaterniond(Eigen::AngleAxisd(1e-12, Eigen::Vector3d::UnitX()))
+                                              : test::random_rotation(rng);
+    a.axes = qa.toRotationMatrix();
+    b.axes = qb.toRotationMatrix();
+    const double size = a.half.maxCoeff() + b.half.maxCoeff() + 1e-3;
+    const double tol = 1e-9 * (size + offset * 1e-6);
+    const double least = test::sat_overlap(a, b);
+    const ContactEstimate e = estimate_contact(a, b);
+    ASSERT_NEAR(e.normal.norm(), 1.0, 1e-12) << k;
+    ASSERT_NEAR(e.penetration, std::max(0.0, least), tol) << k;
+    // The named axis is a least-overlap axis and points from a towards b.
+    ASSERT_NEAR(overlap_along(a, b, e.normal), least, tol) << k;
+    ASSERT_GE(e.normal.dot(b.center - a.center), -tol) << k;
+    edge_axes += std::abs(e.normal.dot(a.axes.col(0))) < 0.999 && std::abs(e.normal.dot(a.axes.col(1))) < 0.999 &&
+                 std::abs(e.normal.dot(a.axes.col(2))) < 0.999 && std::abs(e.normal.dot(b.axes.col(0))) < 0.999 &&
+                 std::abs(e.normal.dot(b.axes.col(1))) < 0.999 && std::abs(e.normal.dot(b.axes.col(2))) < 0.999;
+    if (least <= 0) continue;
+    ++overlapping;
+    OrientedBox moved = b;
+    moved.center += e.normal * (e.penetration + 1e-6 * size);
+    ASSERT_LE(test::sat_overlap(a, moved), tol) << k;
+  }
+  // Not vacuous: many pairs overlap, and some are decided on edge axes.
+  EXPECT_GT(overlapping, 20000 * kWork / 10 / 5);
+  EXPECT_GT(edge_axes, 20);
 }
 
 }  // namespace
