@@ -418,6 +418,12 @@ void CollisionWorld::set_offset(uint32_t i) {
   s.offset_reach = std::max(max_abs(s.offset.min), max_abs(s.offset.max));
 }
 
+OrientedBox CollisionWorld::root_box(uint32_t i) const {
+  OrientedBox box = roots_[i].box;
+  box.center = slots_[i].pose.position + box.center;  // as Pose::apply adds them: place()'s bits
+  return box;
+}
+
 void CollisionWorld::place_box(uint32_t i) {
   const Slot& s = slots_[i];
   const Eigen::Vector3d& p = s.pose.position;
@@ -662,7 +668,7 @@ uint64_t CollisionWorld::refresh_depth(uint32_t i) {
   if (settings_.lod.policy == LodPolicy::screen) {  // thesis returned above
     // (An infinite pixel tolerance makes every depth the shallowest: such a
     // world takes the exact path below, with the same result.)
-    const OrientedBox box = place(tree_of(s).bounds(), s.pose);
+    const OrientedBox box = root_box(i);
     const int deepest = deepest_allowed(settings_.lod, max_depth_of(s));
     if (depth_for(settings_.lod, pixel_area_lower_bound(view_, box), 0, 0, max_depth_of(s)) == deepest) {
       s.area = kAreaNotComputed;  // area() computes it if asked
@@ -682,10 +688,11 @@ uint64_t CollisionWorld::refresh_all_thesis() {
   if (!any_stale_area_) return 0;
   uint64_t computed = 0;
   double a_min = std::numeric_limits<double>::infinity(), a_max = -a_min;
-  for (Slot& s : slots_) {
+  for (uint32_t i = 0; i < slots_.size(); ++i) {
+    Slot& s = slots_[i];
     if (!s.live) continue;
     if (s.area_epoch != epoch_) {
-      s.area = pixel_area(view_, place(tree_of(s).bounds(), s.pose));
+      s.area = pixel_area(view_, root_box(i));
       s.area_epoch = epoch_;
       ++computed;
     }
@@ -707,7 +714,7 @@ uint64_t CollisionWorld::refresh_legacy(bool all) {
   for (uint32_t i = 0; i < slots_.size(); ++i) {
     Slot& s = slots_[i];
     if (!s.live || (!all && !cell_changed_[i])) continue;
-    s.area = pixel_area(view_, place(tree_of(s).bounds(), s.pose));
+    s.area = pixel_area(view_, root_box(i));
     cell_changed_[i] = 0;
     s.area_epoch = epoch_;  // marks "recomputed now" for the depth pass below
     ++computed;
@@ -740,7 +747,7 @@ Result<double> CollisionWorld::area(ObjectHandle h) {
   if (settings_.area_refresh == AreaRefresh::on_demand) {
     refresh_depth(h.slot);
     if (settings_.lod.policy == LodPolicy::fixed || std::isnan(s.area))
-      s.area = pixel_area(view_, place(tree_of(s).bounds(), s.pose));
+      s.area = pixel_area(view_, root_box(h.slot));
   }
   return s.area;
 }

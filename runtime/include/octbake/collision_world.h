@@ -368,6 +368,7 @@ class OCTBAKE_API CollisionWorld {
   const ObjectTree& tree_of(const Slot& s) const;
   int max_depth_of(const Slot& s) const;
   void place_box(uint32_t slot);  // boxes_[slot] from the slot's pose and offset
+  OrientedBox root_box(uint32_t slot) const;  // place(tree bounds, pose), from roots_
   void set_offset(uint32_t i);    // roots_[i], offset and offset_reach from slot i's tree, rotation and scale
   // Sets live slot i to a checked pose that differs from its own; true when
   // the slot just became dirty (the caller lists it in dirty_).
