@@ -293,7 +293,8 @@ TEST(Collide, AllLeafPairsMatchBruteForce) {
 // its root test with a miss at every depth pair, in both argument orders, and
 // the unpadded root boxes are disjoint (independent test). Poses put the
 // roots at gaps from -1e-3 to +1e-3 of their size along a face axis (the
-// knife edge included), with sizes 1e-3..1e3 apart, at the origin and 1e7.
+// knife edge included), or anywhere near each other (every other run), with
+// sizes 1e-3..1e3 apart, at the origin and 1e7.
 TEST(Collide, RootsApartOnlyWhereCollideMissesAtItsRoot) {
   std::mt19937 rng(17);
   int apart = 0, knife_edge = 0, clear = 0, runs = 0;
@@ -316,6 +317,10 @@ TEST(Collide, RootsApartOnlyWhereCollideMissesAtItsRoot) {
     const double gap = gaps[rng() % 8] * size;
     b.pose.position = ra.center + n * (ra.half[axis] + reach_b + gap) - rb0.center +
                       0.3 * size * (uniform01(rng) - 0.5) * ra.axes.col((axis + 1) % 3);
+    const bool anywhere = run % 2 == 1;
+    if (anywhere)
+      b.pose.position = ra.center - rb0.center + size * Eigen::Vector3d(uniform01(rng) - 0.5, uniform01(rng) - 0.5,
+                                                                         uniform01(rng) - 0.5);
     const bool roots_miss = !collide({&ta, a.pose, 0}, {&tb, b.pose, 0}).hit;
     if (roots_apart(a, b)) {
       ++apart;
@@ -333,14 +338,15 @@ TEST(Collide, RootsApartOnlyWhereCollideMissesAtItsRoot) {
     } else {
       knife_edge += roots_miss;
       // A clear gap (a thousandth of the sizes) is always found.
-      if (gap >= 1e-3 * size) ++clear, ADD_FAILURE() << "run " << run << ": a gap of " << gap << " not found";
+      if (!anywhere && gap >= 1e-3 * size) ++clear, ADD_FAILURE() << "run " << run << ": a gap of " << gap << " not found";
     }
     ++runs;
   }
   // Not vacuous: most gaps are found, and collide() misses some roots that
-  // roots_apart leaves to it (the gap within its margin).
-  EXPECT_GT(apart, runs / 3);
+  // roots_apart leaves to it (the gap within its margin, or on an edge axis).
+  EXPECT_GT(apart, runs / 4);
   EXPECT_GT(knife_edge, 0);
+  std::printf("apart %d of %d, left to collide() within the margin %d\n", apart, runs, knife_edge);
   EXPECT_EQ(clear, 0);
 }
 
