@@ -316,25 +316,33 @@ using v4d = double __attribute__((vector_size(32)));
 using v4d_mem = double __attribute__((vector_size(32), aligned(8), may_alias));
 [[gnu::always_inline]] inline void load4(v4d& v, const double* p) { v = *reinterpret_cast<const v4d_mem*>(p); }
 [[gnu::always_inline]] inline void store4(double* p, const v4d& v) { *reinterpret_cast<v4d_mem*>(p) = v; }
+// Lanes the descent writes and the kernels read back soon after (a child's
+// projections, a level's radii) go in 8-lane chunks: one zmm store in the
+// AVX-512 build, whose kernel loads 8 lanes at once (a load spanning two
+// narrower stores is not forwarded from them: it waits for them to retire).
+using v8d = double __attribute__((vector_size(64)));
+using v8d_mem = double __attribute__((vector_size(64), aligned(8), may_alias));
+[[gnu::always_inline]] inline void load8(v8d& v, const double* p) { v = *reinterpret_cast<const v8d_mem*>(p); }
+[[gnu::always_inline]] inline void store8(double* p, const v8d& v) { *reinterpret_cast<v8d_mem*>(p) = v; }
 
 // A child at depth 1 sits at the root's centre +- q on each axis m of its
 // tree; weights[m] give the effect on the projections (times sign). Octants
 // 7 - j are the negations of octants j (negation is exact).
-[[gnu::always_inline]] inline void fill_offsets(Lanes* offset, const v4d (*weights)[4], const double* q,
+[[gnu::always_inline]] inline void fill_offsets(Lanes* offset, const v8d (*weights)[2], const double* q,
                                                 double sign) {
   const double f0 = sign * q[0], f1 = sign * q[1], f2 = sign * q[2];
-  for (int c = 0; c < 4; ++c) {
-    const v4d e0 = weights[0][c] * f0, e1 = weights[1][c] * f1, e2 = weights[2][c] * f2;
-    const v4d s01 = e0 + e1, d01 = e0 - e1;  // +x+y, +x-y
-    const v4d o0 = -(s01 + e2), o1 = d01 - e2, o2 = -(d01 + e2), o3 = s01 - e2;
-    store4(offset[0] + 4 * c, o0);  // -x-y-z
-    store4(offset[1] + 4 * c, o1);  // +x-y-z
-    store4(offset[2] + 4 * c, o2);  // -x+y-z
-    store4(offset[3] + 4 * c, o3);  // +x+y-z
-    store4(offset[7] + 4 * c, -o0);
-    store4(offset[6] + 4 * c, -o1);
-    store4(offset[5] + 4 * c, -o2);
-    store4(offset[4] + 4 * c, -o3);
+  for (int c = 0; c < 2; ++c) {
+    const v8d e0 = weights[0][c] * f0, e1 = weights[1][c] * f1, e2 = weights[2][c] * f2;
+    const v8d s01 = e0 + e1, d01 = e0 - e1;  // +x+y, +x-y
+    const v8d o0 = -(s01 + e2), o1 = d01 - e2, o2 = -(d01 + e2), o3 = s01 - e2;
+    store8(offset[0] + 8 * c, o0);  // -x-y-z
+    store8(offset[1] + 8 * c, o1);  // +x-y-z
+    store8(offset[2] + 8 * c, o2);  // -x+y-z
+    store8(offset[3] + 8 * c, o3);  // +x+y-z
+    store8(offset[7] + 8 * c, -o0);
+    store8(offset[6] + 8 * c, -o1);
+    store8(offset[5] + 8 * c, -o2);
+    store8(offset[4] + 8 * c, -o3);
   }
 }
 
@@ -361,11 +369,11 @@ using v4d_mem = double __attribute__((vector_size(32), aligned(8), may_alias));
 // parent's plus its offset, as the kernel computes them.
 template <bool kScale>
 [[gnu::always_inline]] inline void add_lanes(double* out, const double* a, const double* b, double scale) {
-  for (int k = 0; k < kLanes; k += 4) {
-    v4d x, y;
-    load4(x, a + k);
-    load4(y, b + k);
-    store4(out + k, x + (kScale ? y * scale : y));
+  for (int k = 0; k < kLanes; k += 8) {
+    v8d x, y;
+    load8(x, a + k);
+    load8(y, b + k);
+    store8(out + k, x + (kScale ? y * scale : y));
   }
 }
 
@@ -498,12 +506,12 @@ class PairFrame {
     const Eigen::Vector3d qb = b_min_ + kHalfPow[db] * b_size_.cwiseProduct(cell_center(cb));
     const Eigen::Vector3d t = (rel_.t + rel_.sr * qb) - qa;
     const Lanes* w = t_.w;
-    for (int k = 0; k < kLanes; k += 4) {
-      v4d w0, w1, w2;
-      load4(w0, w[0] + k);
-      load4(w1, w[1] + k);
-      load4(w2, w[2] + k);
-      store4(p + k, (w0 * t[0] + w1 * t[1]) + w2 * t[2]);
+    for (int k = 0; k < kLanes; k += 8) {
+      v8d w0, w1, w2;
+      load8(w0, w[0] + k);
+      load8(w1, w[1] + k);
+      load8(w2, w[2] + k);
+      store8(p + k, (w0 * t[0] + w1 * t[1]) + w2 * t[2]);
     }
   }
 
@@ -568,10 +576,13 @@ class PairFrame {
     lv.first_child = split_tree.first_children(lv.d);
     // Radii of the box pairs below: the split side one depth deeper.
     const double ha = kHalfPow[da + sa], hb = kHalfPow[db + !sa];
-    for (int k = 0; k < kLanes; k += 4) {
-      v4d r;
-      radius4(r, k, ha, hb);
-      store4(lv.radius + k, r);
+    for (int k = 0; k < kLanes; k += 8) {
+      v8d ba, pa, bb, pb;
+      load8(ba, t_.base_a + k);
+      load8(pa, t_.padding_a + k);
+      load8(bb, t_.base_b + k);
+      load8(pb, t_.padding_b + k);
+      store8(lv.radius + k, (ba * ha + pa) + (bb * hb + pb));  // as radius4
     }
     const Lanes* depth1 = sa ? offsets_a() : offsets_b();
     lv.offset = depth1;
@@ -583,10 +594,10 @@ class PairFrame {
         const double h = kHalfPow[lv.d];
         Lanes* scaled = level_offsets_[l];
         for (int j = 0; j < 8; ++j)
-          for (int k = 0; k < kLanes; k += 4) {
-            v4d x;
-            load4(x, depth1[j] + k);
-            store4(scaled[j] + k, x * h);
+          for (int k = 0; k < kLanes; k += 8) {
+            v8d x;
+            load8(x, depth1[j] + k);
+            store8(scaled[j] + k, x * h);
           }
         lv.offset = scaled;
       }
@@ -616,16 +627,16 @@ class PairFrame {
     return centre;
   }
 
-  // W in 4-lane chunks: w[m][c] = lanes 4c..4c+3 of t_.w[m].
-  void load_weights(v4d (&w)[3][4]) const {
+  // W in 8-lane chunks: w[m][c] = lanes 8c..8c+7 of t_.w[m].
+  void load_weights(v8d (&w)[3][2]) const {
     for (int m = 0; m < 3; ++m)
-      for (int c = 0; c < 4; ++c) load4(w[m][c], t_.w[m] + 4 * c);
+      for (int c = 0; c < 2; ++c) load8(w[m][c], t_.w[m] + 8 * c);
   }
 
   // The depth-1 child offsets of A's (B's) root, filled on first use.
   const Lanes* offsets_a() const {
     if (!(filled_offsets_ & 1u)) {
-      v4d w[3][4];
+      v8d w[3][2];
       load_weights(w);
       const double quarter[3] = {0.25 * a_size_[0], 0.25 * a_size_[1], 0.25 * a_size_[2]};
       // t = centre B - centre A: A's child moving by +q moves t by -q.
@@ -636,12 +647,12 @@ class PairFrame {
   }
   const Lanes* offsets_b() const {
     if (!(filled_offsets_ & 2u)) {
-      v4d w[3][4];
+      v8d w[3][2];
       load_weights(w);
       // B's local axis j moves its centre by sR e_j in A's frame.
       const Eigen::Matrix3d& sr = rel_.sr;
-      v4d wb[3][4];
-      for (int c = 0; c < 4; ++c)
+      v8d wb[3][2];
+      for (int c = 0; c < 2; ++c)
         for (int j = 0; j < 3; ++j) wb[j][c] = (w[0][c] * sr(0, j) + w[1][c] * sr(1, j)) + w[2][c] * sr(2, j);
       const double quarter[3] = {0.25 * b_size_[0], 0.25 * b_size_[1], 0.25 * b_size_[2]};
       fill_offsets(t_.offset_b, wb, quarter, 1.0);
