@@ -341,7 +341,7 @@ OctreeMasks build_split(const std::vector<Prim>& prims, const Aabb& bounds, int 
 
 double occupancy_pad(const Aabb& bounds) {
   const double extent = (bounds.max - bounds.min).maxCoeff();
-  const double magnitude = std::max(bounds.min.cwiseAbs().maxCoeff(), bounds.max.cwiseAbs().maxCoeff());
+  const double magnitude = max_abs_coordinate(bounds);
   constexpr double kRelative = 1e-9;
   constexpr double kUlps = 64 * std::numeric_limits<double>::epsilon();
   return kRelative * extent + kUlps * magnitude + std::numeric_limits<double>::min();

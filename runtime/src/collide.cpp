@@ -104,8 +104,8 @@ struct Relative {
     }
     const Aabb& ba = a.tree->bounds();
     const Aabb& bb = b.tree->bounds();
-    const double mag_a = std::max(ba.min.cwiseAbs().maxCoeff(), ba.max.cwiseAbs().maxCoeff());
-    const double mag_b = std::max(bb.min.cwiseAbs().maxCoeff(), bb.max.cwiseAbs().maxCoeff());
+    const double mag_a = max_abs_coordinate(ba);
+    const double mag_b = max_abs_coordinate(bb);
     pad = kRelPad * (mag_a + s * mag_b + t.cwiseAbs().maxCoeff());
   }
 };
@@ -1089,7 +1089,7 @@ PlacedRoot placed_root(const ObjectTree& tree, const Pose& pose) {
   Pose at_origin = pose;
   at_origin.position.setZero();
   const Aabb& b = tree.bounds();
-  return {place(b, at_origin), pose.scale * std::max(b.min.cwiseAbs().maxCoeff(), b.max.cwiseAbs().maxCoeff())};
+  return {place(b, at_origin), pose.scale * max_abs_coordinate(b)};
 }
 
 bool roots_apart(const PlacedRoot& a, const Eigen::Vector3d& pa, const PlacedRoot& b, const Eigen::Vector3d& pb) {

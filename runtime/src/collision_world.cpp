@@ -415,7 +415,7 @@ void CollisionWorld::set_offset(uint32_t i) {
   Slot& s = slots_[i];
   roots_[i] = placed_root(tree_of(s), s.pose);
   s.offset = world_bounds(roots_[i].box);
-  s.offset_reach = std::max(max_abs(s.offset.min), max_abs(s.offset.max));
+  s.offset_reach = max_abs_coordinate(s.offset);
 }
 
 OrientedBox CollisionWorld::root_box(uint32_t i) const {
@@ -1038,7 +1038,7 @@ bool CollisionWorld::ray_leaves(uint32_t i, const Eigen::Vector3d& origin, const
   const Aabb& root = tree.bounds();
   // Rounding of start, of the transform and of the box corners, in local units.
   const double world_mag = max_abs(origin) + max_abs(s.pose.position) + t_box;
-  const double pad = kRelativePad * (std::max(max_abs(root.min), max_abs(root.max)) + max_abs(o)) +
+  const double pad = kRelativePad * (max_abs_coordinate(root) + max_abs(o)) +
                      1e-12 * world_mag / s.pose.scale;
   double local_best = limit;
   bool found = false;
@@ -1211,7 +1211,7 @@ bool CollisionWorld::box_leaves(uint32_t i, const Aabb& box) const {
   q.half /= s.pose.scale;
   const Aabb& root = tree_of(s).bounds();
   const double world_mag = max_abs(box.min) + max_abs(box.max) + max_abs(s.pose.position);
-  const double pad = kRelativePad * (std::max(max_abs(root.min), max_abs(root.max)) + max_abs(q.center) +
+  const double pad = kRelativePad * (max_abs_coordinate(root) + max_abs(q.center) +
                                      q.half.maxCoeff()) +
                      1e-12 * world_mag / s.pose.scale;
   return any_leaf(tree_of(s), s.depth, pad, [&](const Aabb& node) { return sat(as_oriented(node), q).overlap >= 0; });
@@ -1225,7 +1225,7 @@ bool CollisionWorld::sphere_leaves(uint32_t i, const Eigen::Vector3d& center, do
   const Aabb& root = tree_of(s).bounds();
   const double world_mag = max_abs(center) + radius + max_abs(s.pose.position);
   const double pad =
-      kRelativePad * (std::max(max_abs(root.min), max_abs(root.max)) + max_abs(c) + r) + 1e-12 * world_mag / s.pose.scale;
+      kRelativePad * (max_abs_coordinate(root) + max_abs(c) + r) + 1e-12 * world_mag / s.pose.scale;
   return any_leaf(tree_of(s), s.depth, pad, [&](const Aabb& node) {
     const Eigen::Vector3d closest = c.cwiseMax(node.min).cwiseMin(node.max);
     return (closest - c).norm() <= r;

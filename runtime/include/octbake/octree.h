@@ -2,6 +2,7 @@
 // runtime (which decodes it). docs/interface.md section 1; encoding in schema/.
 #pragma once
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <string>
@@ -15,6 +16,12 @@ struct Aabb {
   Eigen::Vector3d max{0, 0, 0};
   bool operator==(const Aabb& o) const { return min == o.min && max == o.max; }
 };
+
+// The largest |coordinate| of the box: the magnitude that rounding errors of
+// coordinates in it scale with (paddings are set from it).
+inline double max_abs_coordinate(const Aabb& b) {
+  return std::max(b.min.cwiseAbs().maxCoeff(), b.max.cwiseAbs().maxCoeff());
+}
 
 // Closed boxes: touching counts.
 inline bool overlaps(const Aabb& a, const Aabb& b) {
