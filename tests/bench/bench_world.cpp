@@ -302,10 +302,34 @@ BENCHMARK(BM_Detect)
 // more about the host than about the code.) The first frame of each block is
 // not counted: the other world has just evicted this one's data from the
 // caches (frames of worlds alternating every frame took 1.8-2.7x longer),
-// and BM_Detect's frames are warm. Reports each side's median frame and
-// `speedup`, one thread's median over two threads'; the two worlds' contacts
-// are compared at the end of every block and must be identical.
+// and BM_Detect's frames are warm. Reports each side's median frame,
+// `speedup` (one thread's median over two threads') and the host's core
+// round trip before and after (below); the two worlds' contacts are compared
+// at the end of every block and must be identical.
 constexpr int64_t kPairedBlock = 8;
+
+// The host's cache-line round trip between two threads (one atomic bounced
+// 20,000 times), reported beside the speedup: on this shared VM it moved
+// between ~100 and ~450 ns from minute to minute (the two vCPUs on near or
+// far cores), and the 10k speedup with it, for the same binary.
+double core_round_trip_ns() {
+  constexpr int kTrips = 20'000;
+  alignas(64) std::atomic<int> ball{0};
+  std::thread other([&] {
+    for (int i = 0; i < kTrips; ++i) {
+      while (ball.load(std::memory_order_acquire) != 2 * i + 1) {}
+      ball.store(2 * i + 2, std::memory_order_release);
+    }
+  });
+  const auto start = std::chrono::steady_clock::now();
+  for (int i = 0; i < kTrips; ++i) {
+    ball.store(2 * i + 1, std::memory_order_release);
+    while (ball.load(std::memory_order_acquire) != 2 * i + 2) {}
+  }
+  const auto end = std::chrono::steady_clock::now();
+  other.join();
+  return std::chrono::duration<double, std::nano>(end - start).count() / kTrips;
+}
 void BM_ThreadsPaired(benchmark::State& state) {
   const Scene scene = make_scene(int(state.range(0)));
   const LodPolicy policy = LodPolicy(state.range(1));
@@ -338,6 +362,7 @@ void BM_ThreadsPaired(benchmark::State& state) {
            x.box_tests == y.box_tests;
   };
   int64_t block = 0;
+  const double round_trip_before = core_round_trip_ns();
   for (auto _ : state) {
     const int64_t first = kWarmup + block * kPairedBlock;
     for (int k = 0; k < 2; ++k) {
@@ -360,6 +385,8 @@ void BM_ThreadsPaired(benchmark::State& state) {
   state.counters["one_thread_median_us"] = one;
   state.counters["two_threads_median_us"] = two;
   state.counters["speedup"] = one / two;
+  state.counters["round_trip_ns_before"] = round_trip_before;
+  state.counters["round_trip_ns_after"] = core_round_trip_ns();
 }
 BENCHMARK(BM_ThreadsPaired)
     ->ArgsProduct({{10'000}, {int(LodPolicy::screen), int(LodPolicy::fixed)}})
