@@ -1038,8 +1038,7 @@ bool CollisionWorld::ray_leaves(uint32_t i, const Eigen::Vector3d& origin, const
   const Aabb& root = tree.bounds();
   // Rounding of start, of the transform and of the box corners, in local units.
   const double world_mag = max_abs(origin) + max_abs(s.pose.position) + t_box;
-  const double pad = kRelativePad * (max_abs_coordinate(root) + max_abs(o)) +
-                     1e-12 * world_mag / s.pose.scale;
+  const double pad = kRelativePad * (max_abs_coordinate(root) + max_abs(o)) + 1e-12 * world_mag / s.pose.scale;
   double local_best = limit;
   bool found = false;
   Node stack[8 * kMaxDepth + 8];
@@ -1211,8 +1210,7 @@ bool CollisionWorld::box_leaves(uint32_t i, const Aabb& box) const {
   q.half /= s.pose.scale;
   const Aabb& root = tree_of(s).bounds();
   const double world_mag = max_abs(box.min) + max_abs(box.max) + max_abs(s.pose.position);
-  const double pad = kRelativePad * (max_abs_coordinate(root) + max_abs(q.center) +
-                                     q.half.maxCoeff()) +
+  const double pad = kRelativePad * (max_abs_coordinate(root) + max_abs(q.center) + q.half.maxCoeff()) +
                      1e-12 * world_mag / s.pose.scale;
   return any_leaf(tree_of(s), s.depth, pad, [&](const Aabb& node) { return sat(as_oriented(node), q).overlap >= 0; });
 }
@@ -1224,8 +1222,7 @@ bool CollisionWorld::sphere_leaves(uint32_t i, const Eigen::Vector3d& center, do
   const double r = radius / s.pose.scale;
   const Aabb& root = tree_of(s).bounds();
   const double world_mag = max_abs(center) + radius + max_abs(s.pose.position);
-  const double pad =
-      kRelativePad * (max_abs_coordinate(root) + max_abs(c) + r) + 1e-12 * world_mag / s.pose.scale;
+  const double pad = kRelativePad * (max_abs_coordinate(root) + max_abs(c) + r) + 1e-12 * world_mag / s.pose.scale;
   return any_leaf(tree_of(s), s.depth, pad, [&](const Aabb& node) {
     const Eigen::Vector3d closest = c.cwiseMax(node.min).cwiseMin(node.max);
     return (closest - c).norm() <= r;

@@ -311,8 +311,10 @@ constexpr int64_t kPairedBlock = 8;
 // The host's cache-line round trip between two threads (one atomic bounced
 // 20,000 times), reported beside the speedup: on this shared VM it moved
 // between ~100 and ~450 ns from minute to minute (the two vCPUs on near or
-// far cores), and the 10k speedup with it, for the same binary.
+// far cores), and the 10k speedup with it, for the same binary. 0 on one
+// core, where the two spinning threads would hand over once per time slice.
 double core_round_trip_ns() {
+  if (std::thread::hardware_concurrency() < 2) return 0;
   constexpr int kTrips = 20'000;
   alignas(64) std::atomic<int> ball{0};
   std::thread other([&] {
@@ -330,6 +332,7 @@ double core_round_trip_ns() {
   other.join();
   return std::chrono::duration<double, std::nano>(end - start).count() / kTrips;
 }
+
 void BM_ThreadsPaired(benchmark::State& state) {
   const Scene scene = make_scene(int(state.range(0)));
   const LodPolicy policy = LodPolicy(state.range(1));
