@@ -197,6 +197,33 @@ TEST(Scene, DuplicateJsonKeys) {
   EXPECT_EQ(error_of(text), "objects[0].scale: duplicate key");
 }
 
+// The path of an error found while reading the text counts every object and
+// array element before it, also far into a large scene, and a good large
+// scene reads back whole.
+TEST(Scene, ErrorPathsFarIntoALargeScene) {
+  json j = good_scene();
+  json& objects = j["objects"];
+  const json car = objects[1];
+  for (int i = 2; i < 5000; ++i) {
+    objects.push_back(car);
+    objects.back()["name"] = "car_" + std::to_string(i);
+  }
+  Result<Scene> s = parse_scene(j.dump(), "");
+  ASSERT_TRUE(s) << s.error().message;
+  ASSERT_EQ(s->objects.size(), 5000u);
+  EXPECT_EQ(s->objects[4321].name, "car_4321");
+  objects[4321]["scale"] = 12345.25;
+  objects[4321]["velocity"] = {0, 0, 0};
+  std::string text = j.dump();
+  const size_t at = text.find("12345.25");
+  EXPECT_EQ(error_of(std::string(text).replace(at, 8, "1e999")), "objects[4321].scale: not a finite number");
+  text.replace(at, 8, "2,\"velocity\":[1,2,3],\"scale\":3");
+  EXPECT_EQ(error_of(text), "objects[4321].scale: duplicate key");
+  text = j.dump();
+  const size_t v = text.find("[0,0,0]", text.find("12345.25"));
+  EXPECT_EQ(error_of(text.replace(v, 7, "[0,0,-1e999]")), "objects[4321].velocity[2]: not a finite number");
+}
+
 TEST(Scene, InvalidJsonNamesLineAndColumn) {
   std::string text = "{\n  \"format\": \"octbake-scene/1\",\n  \"frames\": 10,,\n}";
   std::string e = error_of(text);
