@@ -36,15 +36,10 @@ constexpr size_t kPoseGrain = 512;   // set_poses items
 // only ~200 objects, which one chunk of kPoseGrain would leave to one thread.
 constexpr size_t kCellCheckGrain = 64;
 constexpr size_t kDepthGrain = 32;   // depth refreshes (a pixel area each at most)
+constexpr size_t kAreaGrain = 256;   // slots in the passes over every object's area (thesis, legacy modes)
 // WorldTree cell-move parts on an executor of unknown size: each part reads
 // every move, so few, but enough to balance a few threads.
 constexpr size_t kCellParts = 8;
-
-// A RangeTask running f(begin, end); f must outlive the call.
-template <class F>
-RangeTask range_task(const F& f) {
-  return {[](const void* ctx, size_t b, size_t e) { (*static_cast<const F*>(ctx))(b, e); }, &f};
-}
 
 std::atomic<uint32_t> g_next_world_id{1};
 
@@ -684,55 +679,104 @@ uint64_t CollisionWorld::refresh_depth(uint32_t i) {
   return computed;
 }
 
+namespace {
+
+// The smallest and largest of values merged from several threads: exact, so
+// the result does not depend on the order (as std::min / std::max, a NaN is
+// skipped).
+class AreaRange {
+ public:
+  void merge(double lo, double hi) {
+    for (double x = lo_.load(std::memory_order_relaxed); lo < x;)
+      if (lo_.compare_exchange_weak(x, lo, std::memory_order_relaxed)) break;
+    for (double x = hi_.load(std::memory_order_relaxed); hi > x;)
+      if (hi_.compare_exchange_weak(x, hi, std::memory_order_relaxed)) break;
+  }
+  double lo() const { return lo_.load(); }
+  double hi() const { return hi_.load(); }
+
+ private:
+  std::atomic<double> lo_{std::numeric_limits<double>::infinity()};
+  std::atomic<double> hi_{-std::numeric_limits<double>::infinity()};
+};
+
+}  // namespace
+
+// Every live slot's area (computing the stale ones) and their range, then
+// every depth from it: O(objects), on the world's threads (each slot is
+// written by one item only).
 uint64_t CollisionWorld::refresh_all_thesis() {
   if (!any_stale_area_) return 0;
-  uint64_t computed = 0;
-  double a_min = std::numeric_limits<double>::infinity(), a_max = -a_min;
-  for (uint32_t i = 0; i < slots_.size(); ++i) {
-    Slot& s = slots_[i];
-    if (!s.live) continue;
-    if (s.area_epoch != epoch_) {
-      s.area = pixel_area(view_, root_box(i));
-      s.area_epoch = epoch_;
-      ++computed;
+  std::atomic<uint64_t> computed{0};
+  AreaRange range;
+  const auto areas = [&](size_t b, size_t e) {
+    uint64_t c = 0;
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (size_t i = b; i < e; ++i) {
+      Slot& s = slots_[i];
+      if (!s.live) continue;
+      if (s.area_epoch != epoch_) {
+        s.area = pixel_area(view_, root_box(uint32_t(i)));
+        s.area_epoch = epoch_;
+        ++c;
+      }
+      lo = std::min(lo, s.area), hi = std::max(hi, s.area);
     }
-    a_min = std::min(a_min, s.area);
-    a_max = std::max(a_max, s.area);
-  }
-  for (Slot& s : slots_)
-    if (s.live) s.depth = depth_for(settings_.lod, s.area, a_min, a_max, max_depth_of(s));
+    computed.fetch_add(c, std::memory_order_relaxed);
+    range.merge(lo, hi);
+  };
+  run_parallel(slots_.size(), kAreaGrain, range_task(areas));
+  const double a_min = range.lo(), a_max = range.hi();
+  const auto depths = [&](size_t b, size_t e) {
+    for (size_t i = b; i < e; ++i) {
+      Slot& s = slots_[i];
+      if (s.live) s.depth = depth_for(settings_.lod, s.area, a_min, a_max, max_depth_of(s));
+    }
+  };
+  run_parallel(slots_.size(), kAreaGrain, range_task(depths));
   any_stale_area_ = false;
-  return computed;
+  return computed.load();
 }
 
 // The historic World rule: recompute the stale (or all) areas now; depths of
-// the recomputed objects, or of every object when thesis or `all`.
+// the recomputed objects, or of every object when thesis or `all`. On the
+// world's threads, as refresh_all_thesis.
 uint64_t CollisionWorld::refresh_legacy(bool all) {
   all = all || legacy_all_;  // the camera or the LOD changed
   legacy_all_ = false;
-  uint64_t computed = 0;
-  for (uint32_t i = 0; i < slots_.size(); ++i) {
-    Slot& s = slots_[i];
-    if (!s.live || (!all && !cell_changed_[i])) continue;
-    s.area = pixel_area(view_, root_box(i));
-    cell_changed_[i] = 0;
-    s.area_epoch = epoch_;  // marks "recomputed now" for the depth pass below
-    ++computed;
-  }
-  if (computed == 0) return 0;
+  std::atomic<uint64_t> computed{0};
+  AreaRange range;  // of every live area, after the recomputation
+  const auto areas = [&](size_t b, size_t e) {
+    uint64_t c = 0;
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (size_t i = b; i < e; ++i) {
+      Slot& s = slots_[i];
+      if (!s.live) continue;
+      if (all || cell_changed_[i]) {
+        s.area = pixel_area(view_, root_box(uint32_t(i)));
+        cell_changed_[i] = 0;
+        s.area_epoch = epoch_;  // marks "recomputed now" for the depth pass below
+        ++c;
+      }
+      lo = std::min(lo, s.area), hi = std::max(hi, s.area);
+    }
+    computed.fetch_add(c, std::memory_order_relaxed);
+    range.merge(lo, hi);
+  };
+  run_parallel(slots_.size(), kAreaGrain, range_task(areas));
+  if (computed.load() == 0) return 0;
   const bool every = all || settings_.lod.policy == LodPolicy::thesis;
-  double a_min = 0, a_max = 0;
-  if (every) {
-    a_min = std::numeric_limits<double>::infinity(), a_max = -a_min;
-    for (const Slot& s : slots_)
-      if (s.live) a_min = std::min(a_min, s.area), a_max = std::max(a_max, s.area);
-  }
-  for (Slot& s : slots_) {
-    if (!s.live || !(every || s.area_epoch == epoch_)) continue;
-    s.depth = std::clamp(depth_for(settings_.lod, s.area, a_min, a_max, max_depth_of(s)), 0, max_depth_of(s));
-    s.area_epoch = 0;
-  }
-  return computed;
+  const double a_min = every ? range.lo() : 0, a_max = every ? range.hi() : 0;
+  const auto depths = [&](size_t b, size_t e) {
+    for (size_t i = b; i < e; ++i) {
+      Slot& s = slots_[i];
+      if (!s.live || !(every || s.area_epoch == epoch_)) continue;
+      s.depth = std::clamp(depth_for(settings_.lod, s.area, a_min, a_max, max_depth_of(s)), 0, max_depth_of(s));
+      s.area_epoch = 0;
+    }
+  };
+  run_parallel(slots_.size(), kAreaGrain, range_task(depths));
+  return computed.load();
 }
 
 Result<int> CollisionWorld::depth(ObjectHandle h) {

@@ -30,6 +30,7 @@
 #include <cstdlib>
 #include <memory>
 #include <new>
+#include <numbers>
 #include <random>
 #include <thread>
 #include <vector>
@@ -401,6 +402,58 @@ BENCHMARK(BM_ThreadsPaired)
     ->ArgNames({"objects", "policy"})
     ->Iterations(kFrames100k / 4)  // 10 blocks
     ->Unit(benchmark::kMillisecond);
+
+// World::step (the simulation layer octscene runs) on one thread and on two,
+// paired as BM_ThreadsPaired: the same scenes with a tenth of the objects
+// spinning and the camera flying a loop, so every frame recomputes every
+// object's pixel area (the layer's historic rule) and moves a third of them.
+// Both worlds step the same frames; their collisions must be identical.
+void BM_WorldStepThreads(benchmark::State& state) {
+  Scene scene = make_scene(int(state.range(0)));
+  const double extent = scene.settings.bounds.max.x();
+  for (size_t i = 1; i < scene.objects.size(); i += 10) scene.objects[i].angular_velocity = {0, 1.5, 0.5};
+  for (int k = 0; k <= 8; ++k) {  // a loop around the centre, 1 key per 30 frames
+    const double a = k * std::numbers::pi / 4;
+    scene.settings.camera_path.push_back(
+        {30 * k, Eigen::Vector3d(extent / 2 + extent * std::cos(a), extent * 0.6, extent / 2 + extent * std::sin(a)),
+         Eigen::Vector3d::Constant(extent / 2)});
+  }
+  std::unique_ptr<World> worlds[2];
+  std::vector<Collision> collisions[2];
+  for (int t = 0; t < 2; ++t) {
+    WorldSettings settings = scene.settings;
+    settings.threads = t + 1;
+    worlds[t] = std::make_unique<World>(settings, scene.objects);
+    worlds[t]->step(collisions[t]);  // frame 0 computes every pixel area
+  }
+  FrameTimes times[2] = {FrameTimes(state), FrameTimes(state)};
+  int64_t block = 0;
+  for (auto _ : state) {
+    for (int k = 0; k < 2; ++k) {
+      const int t = int((block + k) % 2);
+      for (int64_t f = 0; f < kPairedBlock; ++f) {
+        times[t].start();
+        worlds[t]->step(collisions[t]);
+        times[t].stop();
+      }
+    }
+    ++block;
+    const auto same = [](const Collision& x, const Collision& y) {
+      return x.a == y.a && x.b == y.b && x.depth_a == y.depth_a && x.depth_b == y.depth_b && x.box_tests == y.box_tests;
+    };
+    if (!std::equal(collisions[0].begin(), collisions[0].end(), collisions[1].begin(), collisions[1].end(), same)) {
+      state.SkipWithError("one and two threads gave different collisions");
+      return;
+    }
+  }
+  const double one = times[0].median(), two = times[1].median();
+  state.counters["one_thread_median_us"] = one;
+  state.counters["two_threads_median_us"] = two;
+  state.counters["speedup"] = one / two;
+  state.counters["collisions"] = double(collisions[0].size());
+}
+BENCHMARK(BM_WorldStepThreads)->ArgName("objects")->Arg(10'000)->Iterations(20)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_WorldStepThreads)->ArgName("objects")->Arg(100'000)->Iterations(4)->Unit(benchmark::kMillisecond);
 
 // FCL on the same poses: a 12-triangle box mesh per tree (the solid trees are
 // exactly their root boxes), OBBRSS BVHs, DynamicAABBTree broadphase.

@@ -17,6 +17,18 @@ TEST(CollisionWorldThreads, ParallelDetectEqualsOneThread) {
   EXPECT_EQ(test::crowd_hash(4500, 6, 3, false), one);
 }
 
+// The passes over every object's area: thesis LOD (its global A_min, A_max)
+// and the simulation layer's historic refresh modes.
+TEST(CollisionWorldThreads, AreaPassesEqualOneThread) {
+  for (const auto& [policy, refresh] : {std::pair{LodPolicy::thesis, AreaRefresh::on_demand},
+                                        std::pair{LodPolicy::thesis, AreaRefresh::on_cell_change},
+                                        std::pair{LodPolicy::screen, AreaRefresh::every_frame}}) {
+    const uint64_t one = test::crowd_hash(4500, 4, 1, true, nullptr, policy, refresh);
+    EXPECT_EQ(test::crowd_hash(4500, 4, 3, true, nullptr, policy, refresh), one)
+        << to_string(policy) << ", refresh mode " << int(refresh);
+  }
+}
+
 // The WorldTree's batch on a 3-thread pool, with enough objects changing
 // cells per batch that every phase runs in parts, equals one-by-one updates.
 TEST(WorldTreeThreads, BatchOnAPoolEqualsOneByOne) {

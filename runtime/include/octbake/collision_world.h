@@ -85,6 +85,12 @@ struct RangeTask {
   void operator()(size_t begin, size_t end) const { run(ctx, begin, end); }
 };
 
+// A RangeTask running f(begin, end); f must outlive the call.
+template <class F>
+RangeTask range_task(const F& f) {
+  return {[](const void* ctx, size_t b, size_t e) { (*static_cast<const F*>(ctx))(b, e); }, &f};
+}
+
 // The app's job system. parallel_for must call task on disjoint ranges that
 // together cover [0, count) exactly once, each range at least `grain` items
 // (except possibly the last), in any order, on any threads, and return only
@@ -344,6 +350,8 @@ class OCTBAKE_API CollisionWorld {
   std::optional<ObjectHandle> handle_at(uint32_t slot) const;
 
  private:
+  friend class World;  // runs its per-object motion with run_parallel
+
   // Hot first: set_pose reads the handle check and the pose (one cache line).
   struct alignas(64) Slot {
     uint32_t generation = 0;
@@ -381,6 +389,7 @@ class OCTBAKE_API CollisionWorld {
   uint64_t refresh_legacy(bool all);
   PlacedTree placed(uint32_t i) const;
   void run_parallel(size_t count, size_t grain, RangeTask task);
+  bool has_threads() const { return settings_.executor != nullptr || pool_ != nullptr; }  // else run_parallel is a loop
   void collect_pairs();  // pairs_: the WorldTree's overlapping pairs, sorted
   void find_apart(size_t begin, size_t end);  // results_[k].apart
   void test_pairs(size_t begin, size_t end);

@@ -126,12 +126,14 @@ class OCTBAKE_API World {
   std::vector<int64_t> start_;
   std::vector<Eigen::Quaterniond> rotation0_;  // orientation at frame 0
   std::vector<uint32_t> moving_;  // indices with non-zero velocity or angular velocity, ascending
+  std::vector<ObjectHandle> moving_handles_;  // their handles
+  std::vector<Pose> next_poses_;              // scratch: their poses for the next frame
   std::vector<Contact> contacts_;  // scratch
 
   void move_to(uint32_t i, const Eigen::Vector3d& p);  // position (and the collision world's pose)
   void restart_motion(uint32_t i, int64_t frame);       // the motion changed: p0, f0 = now
   void respond(const Collision& c);
-  void advance(uint32_t i);
+  void advance(uint32_t i);  // objects_[i]'s pose (and velocity) one timestep on; thread-safe per i
 };
 
 }  // namespace octbake

@@ -102,15 +102,17 @@ inline std::vector<OrientedBox> world_leaves(const ObjectTree& tree, const Pose&
 // 4th frame a few are destroyed and created again (their slots reused).
 // Poses go in by one set_poses (batch) or a set_pose loop. Returns a hash of
 // every frame's contacts (all fields) and stats, for comparing runs.
-inline uint64_t crowd_hash(int n, int frames, int threads, bool batch, Executor* executor = nullptr) {
+inline uint64_t crowd_hash(int n, int frames, int threads, bool batch, Executor* executor = nullptr,
+                           LodPolicy policy = LodPolicy::screen, AreaRefresh refresh = AreaRefresh::on_demand) {
   std::mt19937 rng(11);
   const std::vector<ObjectTree> trees = random_trees(rng, 4);
   const double side = 2.5 * std::cbrt(double(n));
   CollisionSettings s;
   s.bounds = {Eigen::Vector3d::Zero(), Eigen::Vector3d::Constant(side)};
   s.world_depth = 5;
-  s.lod.policy = LodPolicy::screen;
+  s.lod.policy = policy;
   s.lod.max_depth = 5;
+  s.area_refresh = refresh;
   s.threads = threads;
   s.executor = executor;
   CollisionWorld world(s);
