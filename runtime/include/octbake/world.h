@@ -47,7 +47,7 @@ struct WorldSettings {
   // Frames strictly ascending; empty = fixed camera. Interpolated by
   // camera_on_path (motion.h).
   std::vector<CameraKey> camera_path;
-  int threads = 1;                     // pair tests in parallel (CollisionSettings::threads)
+  int threads = 1;                     // CollisionSettings::threads; also the motion and the area passes of step()
   Executor* executor = nullptr;        // the app's job system, if any (not owned)
 };
 
