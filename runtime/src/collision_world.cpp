@@ -25,10 +25,14 @@ namespace octbake {
 
 namespace {
 
-// World AABBs are padded by this fraction of their coordinates' magnitude so
-// that rounding in the pre-filter never rejects a pair collide() would accept
-// (collide() pads its boxes too). Same rule as the historic World.
+// World AABBs (and the queries' boxes) are padded by kRelativePad of the
+// object's own extent, as collide() pads its boxes, plus kWorldRoundingPad of
+// the world coordinates, whose rounding (~1e-16 of them, in position + offset)
+// it covers ~4,500 times over. The second term used to be kRelativePad too:
+// at 1e6 it padded 1e-3-sized objects by their own size (10x the candidate
+// pairs, 2.2x the frame).
 constexpr double kRelativePad = 1e-9;
+constexpr double kWorldRoundingPad = 1e-12;
 // Items per parallel chunk: enough work per chunk to pay for handing it out.
 constexpr size_t kPairGrain = 16;    // pair tests: 0.3-1 µs each on small scenes, more on mixed sizes
 constexpr size_t kPoseGrain = 512;   // set_poses items
@@ -422,7 +426,7 @@ OrientedBox CollisionWorld::root_box(uint32_t i) const {
 void CollisionWorld::place_box(uint32_t i) {
   const Slot& s = slots_[i];
   const Eigen::Vector3d& p = s.pose.position;
-  const double pad = kRelativePad * (max_abs(p) + s.offset_reach);
+  const double pad = kRelativePad * s.offset_reach + kWorldRoundingPad * max_abs(p);
   boxes_[i].min = (p + s.offset.min).array() - pad;
   boxes_[i].max = (p + s.offset.max).array() + pad;
 }
@@ -1082,7 +1086,8 @@ bool CollisionWorld::ray_leaves(uint32_t i, const Eigen::Vector3d& origin, const
   const Aabb& root = tree.bounds();
   // Rounding of start, of the transform and of the box corners, in local units.
   const double world_mag = max_abs(origin) + max_abs(s.pose.position) + t_box;
-  const double pad = kRelativePad * (max_abs_coordinate(root) + max_abs(o)) + 1e-12 * world_mag / s.pose.scale;
+  const double pad =
+      kRelativePad * (max_abs_coordinate(root) + max_abs(o)) + kWorldRoundingPad * world_mag / s.pose.scale;
   double local_best = limit;
   bool found = false;
   Node stack[8 * kMaxDepth + 8];
@@ -1255,7 +1260,7 @@ bool CollisionWorld::box_leaves(uint32_t i, const Aabb& box) const {
   const Aabb& root = tree_of(s).bounds();
   const double world_mag = max_abs(box.min) + max_abs(box.max) + max_abs(s.pose.position);
   const double pad = kRelativePad * (max_abs_coordinate(root) + max_abs(q.center) + q.half.maxCoeff()) +
-                     1e-12 * world_mag / s.pose.scale;
+                     kWorldRoundingPad * world_mag / s.pose.scale;
   return any_leaf(tree_of(s), s.depth, pad, [&](const Aabb& node) { return sat(as_oriented(node), q).overlap >= 0; });
 }
 
@@ -1266,7 +1271,8 @@ bool CollisionWorld::sphere_leaves(uint32_t i, const Eigen::Vector3d& center, do
   const double r = radius / s.pose.scale;
   const Aabb& root = tree_of(s).bounds();
   const double world_mag = max_abs(center) + radius + max_abs(s.pose.position);
-  const double pad = kRelativePad * (max_abs_coordinate(root) + max_abs(c) + r) + 1e-12 * world_mag / s.pose.scale;
+  const double pad =
+      kRelativePad * (max_abs_coordinate(root) + max_abs(c) + r) + kWorldRoundingPad * world_mag / s.pose.scale;
   return any_leaf(tree_of(s), s.depth, pad, [&](const Aabb& node) {
     const Eigen::Vector3d closest = c.cwiseMax(node.min).cwiseMin(node.max);
     return (closest - c).norm() <= r;

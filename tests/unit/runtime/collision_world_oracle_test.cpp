@@ -278,6 +278,49 @@ TEST(CollisionWorldOracle, ThreadPoolCoversEveryItemOnce) {
   }
 }
 
+// Cubes of edge 2^-10 (and 1) in a row at the origin, 1e6 and 1e7: cubes that
+// touch (exactly, in doubles) are a candidate pair and a contact at every
+// depth; cubes 1/16 of an edge apart are neither, however far out (the world
+// boxes' padding for rounding must not swallow small objects).
+TEST(CollisionWorldOracle, TinyCubesFarOutAreCandidatesOnlyWhenNear) {
+  OctreeMasks m;
+  m.bounds = {Eigen::Vector3d::Constant(-0.5), Eigen::Vector3d::Constant(0.5)};
+  for (int d = 0; d < 4; ++d) m.masks.emplace_back(size_t(1) << (3 * d), uint8_t{0xFF});
+  const ObjectTree cube = test::make_tree(std::move(m));
+  for (double offset : {0.0, 1e6, 1e7})
+    for (double edge : {std::ldexp(1.0, -10), 1.0})
+      for (int depth = 0; depth <= 4; ++depth) {
+        CollisionSettings s;
+        s.bounds = {Eigen::Vector3d::Constant(offset - 1), Eigen::Vector3d::Constant(offset + 1)};
+        s.lod.policy = LodPolicy::fixed;
+        s.lod.min_depth = 0;
+        s.lod.max_depth = depth;
+        CollisionWorld world(s);
+        // Along x: 0 and 1 touch, 2 is a gap past 1; 3 is a gap above 0 (and 1).
+        const double gap = edge / 16;
+        const double xs[3] = {offset, offset + edge, offset + 2 * edge + gap};
+        std::vector<ObjectHandle> h;
+        for (double x : xs) {
+          Pose p;
+          p.position = {x, offset, offset};
+          p.scale = edge;
+          h.push_back(world.create(TreeSource::fixed(&cube), p).value());
+        }
+        Pose above;  // over cube 0, one gap up
+        above.position = {offset, offset + edge + gap, offset};
+        above.scale = edge;
+        h.push_back(world.create(TreeSource::fixed(&cube), above).value());
+        std::vector<Contact> contacts;
+        const DetectStats st = world.detect(contacts);
+        SCOPED_TRACE(testing::Message() << "offset " << offset << ", edge " << edge << ", depth " << depth);
+        EXPECT_EQ(st.candidate_pairs, 1u);
+        ASSERT_EQ(contacts.size(), 1u);
+        EXPECT_EQ(contacts[0].a.slot, h[0].slot);
+        EXPECT_EQ(contacts[0].b.slot, h[1].slot);
+        EXPECT_EQ(contacts[0].depth_a, depth);
+      }
+}
+
 }  // namespace
 }  // namespace octbake
 
