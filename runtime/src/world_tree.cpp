@@ -7,7 +7,9 @@
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <type_traits>
 #include <utility>
+#include <vector>
 
 namespace octbake {
 
@@ -425,6 +427,19 @@ uint64_t lane_max(uint64_t a, uint64_t b) {
 #endif
 }
 
+// The pair filter of the scans that know the boxes (scan_part,
+// overlapping_pairs): closed world AABBs that overlap.
+struct BoxesOverlap {
+  std::span<const Aabb> boxes;
+  bool operator()(uint32_t a, uint32_t b) const { return overlaps(boxes[a], boxes[b]); }
+};
+
+// A busy cell with more occupants than this is swept when the pairs are
+// filtered by their boxes: occupants sorted by box min x, each tested only
+// against those whose x interval starts before its own ends. A crowd in the
+// few cells of a shallow world is then O(k log k + pairs), not O(k^2).
+constexpr size_t kSweepFrom = 32;
+
 }  // namespace
 
 // Busy bitmap words per scan part: 512 cells, enough work to pay for handing
@@ -451,6 +466,26 @@ void WorldTree::scan_cells(size_t begin, size_t end, Keep keep, Emit emit) const
       const uint32_t* ids = cell.ids.data();
       const size_t n = cell.ids.size();
       const uint64_t at = packed(cell.at);
+      if constexpr (std::is_same_v<Keep, BoxesOverlap>) {
+        if (n > kSweepFrom) {
+          // Per thread, kept: a steady frame allocates nothing. Ties in min x
+          // are ordered by id; the pairs are sorted afterwards anyway.
+          thread_local std::vector<std::pair<double, uint32_t>> by_min_x;
+          by_min_x.clear();
+          for (size_t i = 0; i < n; ++i) by_min_x.emplace_back(keep.boxes[ids[i]].min.x(), ids[i]);
+          std::sort(by_min_x.begin(), by_min_x.end());
+          for (size_t i = 0; i + 1 < n; ++i) {
+            const uint32_t a = by_min_x[i].second;
+            const Aabb& box = keep.boxes[a];
+            const uint64_t la = lo_[a];
+            for (size_t j = i + 1; j < n && by_min_x[j].first <= box.max.x(); ++j) {
+              const uint32_t b = by_min_x[j].second;
+              if (lane_max(la, lo_[b]) == at && overlaps(box, keep.boxes[b])) emit(std::min(a, b), std::max(a, b));
+            }
+          }
+          continue;
+        }
+      }
       for (size_t i = 0; i + 1 < n; ++i) {
         const uint32_t a = ids[i];
         const uint64_t la = lo_[a];
@@ -487,16 +522,6 @@ void WorldTree::candidate_pairs(std::vector<std::pair<uint32_t, uint32_t>>& out)
   scan_cells(0, busy_.size(), all, [&](uint32_t a, uint32_t b) { out.emplace_back(a, b); });
   finish(out, all);
 }
-
-namespace {
-
-// The filter of overlapping_pairs: closed world AABBs that overlap.
-struct BoxesOverlap {
-  std::span<const Aabb> boxes;
-  bool operator()(uint32_t a, uint32_t b) const { return overlaps(boxes[a], boxes[b]); }
-};
-
-}  // namespace
 
 void WorldTree::overlapping_pairs(std::span<const Aabb> boxes, std::vector<std::pair<uint32_t, uint32_t>>& out) const {
   assert(boxes.size() >= entries_.size());
