@@ -21,7 +21,10 @@
 // Only cells holding two or more objects are scanned (a list kept as objects
 // enter and leave cells), then the pairs are sorted. Cost: the sum over busy
 // cells of occupants^2, i.e. the true candidate set, plus |overflow| *
-// |objects|, all linear; no pass over the world's single-object cells.
+// |objects|, all linear; no pass over the world's single-object cells. When
+// the pairs are filtered by their boxes (overlapping_pairs, scan_part), a
+// cell of more than 32 is swept by box min x instead: a crowd in a shallow
+// world costs k log k plus the overlapping pairs, not k^2.
 #pragma once
 #include <array>
 #include <cassert>
