@@ -706,11 +706,11 @@ class AreaRange {
 
 }  // namespace
 
-// Every live slot's area (computing the stale ones) and their range, then
-// every depth from it: O(objects), on the world's threads (each slot is
-// written by one item only).
-uint64_t CollisionWorld::refresh_all_thesis() {
-  if (!any_stale_area_) return 0;
+// The areas of the live slots for which stale(i) holds, computed now and
+// marked with epoch_, on the world's threads (each slot is written by one
+// item only); [a_min, a_max]: the range of every live area afterwards.
+template <class Stale>
+uint64_t CollisionWorld::compute_areas(Stale stale, double& a_min, double& a_max) {
   std::atomic<uint64_t> computed{0};
   AreaRange range;
   const auto areas = [&](size_t b, size_t e) {
@@ -719,7 +719,7 @@ uint64_t CollisionWorld::refresh_all_thesis() {
     for (size_t i = b; i < e; ++i) {
       Slot& s = slots_[i];
       if (!s.live) continue;
-      if (s.area_epoch != epoch_) {
+      if (stale(uint32_t(i))) {
         s.area = pixel_area(view_, root_box(uint32_t(i)));
         s.area_epoch = epoch_;
         ++c;
@@ -730,7 +730,16 @@ uint64_t CollisionWorld::refresh_all_thesis() {
     range.merge(lo, hi);
   };
   run_parallel(slots_.size(), kAreaGrain, range_task(areas));
-  const double a_min = range.lo(), a_max = range.hi();
+  a_min = range.lo(), a_max = range.hi();
+  return computed.load();
+}
+
+// Every live slot's area (the stale ones computed) and every depth from
+// their range: O(objects).
+uint64_t CollisionWorld::refresh_all_thesis() {
+  if (!any_stale_area_) return 0;
+  double a_min, a_max;
+  const uint64_t computed = compute_areas([&](uint32_t i) { return slots_[i].area_epoch != epoch_; }, a_min, a_max);
   const auto depths = [&](size_t b, size_t e) {
     for (size_t i = b; i < e; ++i) {
       Slot& s = slots_[i];
@@ -739,38 +748,26 @@ uint64_t CollisionWorld::refresh_all_thesis() {
   };
   run_parallel(slots_.size(), kAreaGrain, range_task(depths));
   any_stale_area_ = false;
-  return computed.load();
+  return computed;
 }
 
 // The historic World rule: recompute the stale (or all) areas now; depths of
-// the recomputed objects, or of every object when thesis or `all`. On the
-// world's threads, as refresh_all_thesis.
+// the recomputed objects, or of every object when thesis or `all`.
 uint64_t CollisionWorld::refresh_legacy(bool all) {
   all = all || legacy_all_;  // the camera or the LOD changed
   legacy_all_ = false;
-  std::atomic<uint64_t> computed{0};
-  AreaRange range;  // of every live area, after the recomputation
-  const auto areas = [&](size_t b, size_t e) {
-    uint64_t c = 0;
-    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-    for (size_t i = b; i < e; ++i) {
-      Slot& s = slots_[i];
-      if (!s.live) continue;
-      if (all || cell_changed_[i]) {
-        s.area = pixel_area(view_, root_box(uint32_t(i)));
-        cell_changed_[i] = 0;
-        s.area_epoch = epoch_;  // marks "recomputed now" for the depth pass below
-        ++c;
-      }
-      lo = std::min(lo, s.area), hi = std::max(hi, s.area);
-    }
-    computed.fetch_add(c, std::memory_order_relaxed);
-    range.merge(lo, hi);
+  double a_min, a_max;
+  const auto stale = [&](uint32_t i) {
+    if (!all && !cell_changed_[i]) return false;
+    cell_changed_[i] = 0;  // taken: its area is computed now
+    return true;
   };
-  run_parallel(slots_.size(), kAreaGrain, range_task(areas));
-  if (computed.load() == 0) return 0;
+  const uint64_t computed = compute_areas(stale, a_min, a_max);
+  if (computed == 0) return 0;
+  // area_epoch == epoch_ marks the slots computed now (and older ones of the
+  // same epoch: the legacy modes reset it below, so there are none).
   const bool every = all || settings_.lod.policy == LodPolicy::thesis;
-  const double a_min = every ? range.lo() : 0, a_max = every ? range.hi() : 0;
+  if (!every) a_min = a_max = 0;
   const auto depths = [&](size_t b, size_t e) {
     for (size_t i = b; i < e; ++i) {
       Slot& s = slots_[i];
@@ -780,7 +777,7 @@ uint64_t CollisionWorld::refresh_legacy(bool all) {
     }
   };
   run_parallel(slots_.size(), kAreaGrain, range_task(depths));
-  return computed.load();
+  return computed;
 }
 
 Result<int> CollisionWorld::depth(ObjectHandle h) {

@@ -386,6 +386,8 @@ class OCTBAKE_API CollisionWorld {
   // Makes the area and depth of slot i current; returns areas computed.
   uint64_t refresh_depth(uint32_t i);
   uint64_t refresh_all_thesis();
+  template <class Stale>
+  uint64_t compute_areas(Stale stale, double& a_min, double& a_max);  // see the definition
   uint64_t refresh_legacy(bool all);
   PlacedTree placed(uint32_t i) const;
   void run_parallel(size_t count, size_t grain, RangeTask task);
