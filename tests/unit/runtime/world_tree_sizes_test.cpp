@@ -91,6 +91,17 @@ double ray_box(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_max,
   return t0;
 }
 
+// overlapping_pairs, and the scan in parts (last first), give `want`.
+void expect_overlapping_pairs(const WorldTree& tree, const std::vector<Aabb>& boxes, const Pairs& want) {
+  Pairs got;
+  tree.overlapping_pairs(boxes, got);
+  EXPECT_EQ(got, want);
+  Collect sink;
+  for (size_t p = tree.scan_parts(); p-- > 0;) tree.scan_part(p, boxes, sink);
+  tree.finish_pairs(boxes, sink.pairs);
+  EXPECT_EQ(sink.pairs, want);
+}
+
 // Everything a caller sees, checked against brute force; returns the number
 // of overlapping pairs (the caller checks the scene is not vacuous).
 size_t check(const Oracle& g, const WorldTree& tree, const std::vector<Aabb>& boxes, const std::vector<bool>& present,
@@ -107,13 +118,7 @@ size_t check(const Oracle& g, const WorldTree& tree, const std::vector<Aabb>& bo
   Pairs got;
   tree.candidate_pairs(got);
   EXPECT_EQ(got, want_candidates);
-  tree.overlapping_pairs(boxes, got);
-  EXPECT_EQ(got, want_overlaps);
-  // The parts, last first.
-  Collect sink;
-  for (size_t p = tree.scan_parts(); p-- > 0;) tree.scan_part(p, boxes, sink);
-  tree.finish_pairs(boxes, sink.pairs);
-  EXPECT_EQ(sink.pairs, want_overlaps);
+  expect_overlapping_pairs(tree, boxes, want_overlaps);
 
   std::vector<uint32_t> found;
   for (int q = 0; q < 20; ++q) {
@@ -260,13 +265,7 @@ TEST(WorldTreeSizes, CrowdedCellOfTouchingBoxesMatchesBruteForce) {
   for (uint32_t a = 0; a < boxes.size(); ++a)
     for (uint32_t b = a + 1; b < boxes.size(); ++b)
       if (overlaps(boxes[a], boxes[b])) want.emplace_back(a, b);
-  Pairs got;
-  tree.overlapping_pairs(boxes, got);
-  EXPECT_EQ(got, want);
-  Collect sink;
-  for (size_t p = tree.scan_parts(); p-- > 0;) tree.scan_part(p, boxes, sink);
-  tree.finish_pairs(boxes, sink.pairs);
-  EXPECT_EQ(sink.pairs, want);
+  expect_overlapping_pairs(tree, boxes, want);
   EXPECT_GT(want.size(), 72u * 6);  // each lattice box touches its up to 26 neighbours
 }
 
