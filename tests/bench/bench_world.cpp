@@ -334,6 +334,17 @@ double core_round_trip_ns() {
   return std::chrono::duration<double, std::nano>(end - start).count() / kTrips;
 }
 
+// The paired benchmarks' counters: both median frames, their ratio, and the
+// host's core round trip before and after the frames (see core_round_trip_ns).
+void set_paired_counters(benchmark::State& state, FrameTimes (&times)[2], double round_trip_before) {
+  const double one = times[0].median(), two = times[1].median();
+  state.counters["one_thread_median_us"] = one;
+  state.counters["two_threads_median_us"] = two;
+  state.counters["speedup"] = one / two;
+  state.counters["round_trip_ns_before"] = round_trip_before;
+  state.counters["round_trip_ns_after"] = core_round_trip_ns();
+}
+
 void BM_ThreadsPaired(benchmark::State& state) {
   const Scene scene = make_scene(int(state.range(0)));
   const LodPolicy policy = LodPolicy(state.range(1));
@@ -385,12 +396,7 @@ void BM_ThreadsPaired(benchmark::State& state) {
       return;
     }
   }
-  const double one = times[0].median(), two = times[1].median();
-  state.counters["one_thread_median_us"] = one;
-  state.counters["two_threads_median_us"] = two;
-  state.counters["speedup"] = one / two;
-  state.counters["round_trip_ns_before"] = round_trip_before;
-  state.counters["round_trip_ns_after"] = core_round_trip_ns();
+  set_paired_counters(state, times, round_trip_before);
 }
 BENCHMARK(BM_ThreadsPaired)
     ->ArgsProduct({{10'000}, {int(LodPolicy::screen), int(LodPolicy::fixed)}})
@@ -428,6 +434,7 @@ void BM_WorldStepThreads(benchmark::State& state) {
   }
   FrameTimes times[2] = {FrameTimes(state), FrameTimes(state)};
   int64_t block = 0;
+  const double round_trip_before = core_round_trip_ns();
   for (auto _ : state) {
     for (int k = 0; k < 2; ++k) {
       const int t = int((block + k) % 2);
@@ -446,10 +453,7 @@ void BM_WorldStepThreads(benchmark::State& state) {
       return;
     }
   }
-  const double one = times[0].median(), two = times[1].median();
-  state.counters["one_thread_median_us"] = one;
-  state.counters["two_threads_median_us"] = two;
-  state.counters["speedup"] = one / two;
+  set_paired_counters(state, times, round_trip_before);
   state.counters["collisions"] = double(collisions[0].size());
 }
 BENCHMARK(BM_WorldStepThreads)->ArgName("objects")->Arg(10'000)->Iterations(20)->Unit(benchmark::kMillisecond);
