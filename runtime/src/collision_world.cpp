@@ -706,13 +706,14 @@ class AreaRange {
 
 }  // namespace
 
-// The areas of the live slots for which stale(i) holds, computed now and
-// marked with epoch_, on the world's threads (each slot is written by one
-// item only); [a_min, a_max]: the range of every live area afterwards.
-template <class Stale>
-uint64_t CollisionWorld::compute_areas(Stale stale, double& a_min, double& a_max) {
-  std::atomic<uint64_t> computed{0};
-  AreaRange range;
+// The areas of the live slots for which stale(i) holds, computed now, then
+// computed(slot) for each, on the world's threads (each slot is written by
+// one item only). With `range` (a_min, a_max): the range of every live area
+// afterwards (a loop-carried min and max: only when asked).
+template <class Stale, class Computed>
+uint64_t CollisionWorld::compute_areas(Stale stale, Computed computed, double* range) {
+  std::atomic<uint64_t> count{0};
+  AreaRange merged;
   const auto areas = [&](size_t b, size_t e) {
     uint64_t c = 0;
     double lo = std::numeric_limits<double>::infinity(), hi = -lo;
@@ -721,62 +722,60 @@ uint64_t CollisionWorld::compute_areas(Stale stale, double& a_min, double& a_max
       if (!s.live) continue;
       if (stale(uint32_t(i))) {
         s.area = pixel_area(view_, root_box(uint32_t(i)));
-        s.area_epoch = epoch_;
+        computed(s);
         ++c;
       }
-      lo = std::min(lo, s.area), hi = std::max(hi, s.area);
+      if (range) lo = std::min(lo, s.area), hi = std::max(hi, s.area);
     }
-    computed.fetch_add(c, std::memory_order_relaxed);
-    range.merge(lo, hi);
+    count.fetch_add(c, std::memory_order_relaxed);
+    if (range) merged.merge(lo, hi);
   };
   run_parallel(slots_.size(), kAreaGrain, range_task(areas));
-  a_min = range.lo(), a_max = range.hi();
-  return computed.load();
+  if (range) range[0] = merged.lo(), range[1] = merged.hi();
+  return count.load();
+}
+
+int CollisionWorld::depth_in_range(const Slot& s, double a_min, double a_max) const {
+  return std::clamp(depth_for(settings_.lod, s.area, a_min, a_max, max_depth_of(s)), 0, max_depth_of(s));
+}
+
+// Every depth from the area range (thesis LOD), on the world's threads.
+void CollisionWorld::set_depths_from(const double (&range)[2]) {
+  const auto depths = [&](size_t b, size_t e) {
+    for (size_t i = b; i < e; ++i)
+      if (slots_[i].live) slots_[i].depth = depth_in_range(slots_[i], range[0], range[1]);
+  };
+  run_parallel(slots_.size(), kAreaGrain, range_task(depths));
 }
 
 // Every live slot's area (the stale ones computed) and every depth from
 // their range: O(objects).
 uint64_t CollisionWorld::refresh_all_thesis() {
   if (!any_stale_area_) return 0;
-  double a_min, a_max;
-  const uint64_t computed = compute_areas([&](uint32_t i) { return slots_[i].area_epoch != epoch_; }, a_min, a_max);
-  const auto depths = [&](size_t b, size_t e) {
-    for (size_t i = b; i < e; ++i) {
-      Slot& s = slots_[i];
-      if (s.live) s.depth = depth_for(settings_.lod, s.area, a_min, a_max, max_depth_of(s));
-    }
-  };
-  run_parallel(slots_.size(), kAreaGrain, range_task(depths));
+  double range[2];
+  const uint64_t computed = compute_areas([&](uint32_t i) { return slots_[i].area_epoch != epoch_; },
+                                          [&](Slot& s) { s.area_epoch = epoch_; }, range);
+  set_depths_from(range);
   any_stale_area_ = false;
   return computed;
 }
 
 // The historic World rule: recompute the stale (or all) areas now; depths of
-// the recomputed objects, or of every object when thesis or `all`.
+// the recomputed objects, or of every object when thesis or `all` (then from
+// the range of every area).
 uint64_t CollisionWorld::refresh_legacy(bool all) {
   all = all || legacy_all_;  // the camera or the LOD changed
   legacy_all_ = false;
-  double a_min, a_max;
   const auto stale = [&](uint32_t i) {
     if (!all && !cell_changed_[i]) return false;
     cell_changed_[i] = 0;  // taken: its area is computed now
     return true;
   };
-  const uint64_t computed = compute_areas(stale, a_min, a_max);
-  if (computed == 0) return 0;
-  // area_epoch == epoch_ marks the slots computed now (and older ones of the
-  // same epoch: the legacy modes reset it below, so there are none).
-  const bool every = all || settings_.lod.policy == LodPolicy::thesis;
-  if (!every) a_min = a_max = 0;
-  const auto depths = [&](size_t b, size_t e) {
-    for (size_t i = b; i < e; ++i) {
-      Slot& s = slots_[i];
-      if (!s.live || !(every || s.area_epoch == epoch_)) continue;
-      s.depth = std::clamp(depth_for(settings_.lod, s.area, a_min, a_max, max_depth_of(s)), 0, max_depth_of(s));
-      s.area_epoch = 0;
-    }
-  };
-  run_parallel(slots_.size(), kAreaGrain, range_task(depths));
+  if (!all && settings_.lod.policy != LodPolicy::thesis)
+    return compute_areas(stale, [&](Slot& s) { s.depth = depth_in_range(s, 0, 0); }, nullptr);
+  double range[2];
+  const uint64_t computed = compute_areas(stale, [](Slot&) {}, range);
+  if (computed > 0) set_depths_from(range);
   return computed;
 }
 

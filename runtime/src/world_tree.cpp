@@ -503,17 +503,87 @@ void WorldTree::scan_cells(size_t begin, size_t end, Keep keep, Emit emit) const
 template <class Keep>
 void WorldTree::finish(std::vector<std::pair<uint32_t, uint32_t>>& out, Keep keep) const {
   // Overflow objects are in no cell, so these never repeat a cell pair.
-  for (uint32_t a : overflow_ids_)
-    for (uint32_t b : present_ids_) {
-      if (b == a || (entries_[b].overflow && b < a)) continue;  // an overflow pair once
-      const uint32_t lo = std::min(a, b), hi = std::max(a, b);
-      if (keep(lo, hi)) out.emplace_back(lo, hi);
+  bool done = false;
+  if constexpr (std::is_same_v<Keep, BoxesOverlap>)
+    if (uint64_t(overflow_ids_.size()) * present_ids_.size() > kCoarseFrom) {
+      pair_overflow_by_coarse_cells(out, keep.boxes);
+      done = true;
     }
+  if (!done)
+    for (uint32_t a : overflow_ids_)
+      for (uint32_t b : present_ids_) {
+        if (b == a || (entries_[b].overflow && b < a)) continue;  // an overflow pair once
+        const uint32_t lo = std::min(a, b), hi = std::max(a, b);
+        if (keep(lo, hi)) out.emplace_back(lo, hi);
+      }
   // The radix sort's fixed cost (8 count tables) only pays off on many pairs.
   if (out.size() < kRadixFrom)
     std::sort(out.begin(), out.end());
   else
     radix_sort(out, sort_scratch_);
+}
+
+// The overflow objects are listed per coarse cell (2^kCoarseShift cells a
+// side), each object over its cell range shifted down: a pair that overlaps
+// shares a cell, hence a coarse cell, and is taken in its first common coarse
+// cell only (the cell pairs' rule, one level up). An overflow object over
+// more than kCoarseMaxCells coarse cells is paired with every object as
+// before.
+void WorldTree::pair_overflow_by_coarse_cells(std::vector<std::pair<uint32_t, uint32_t>>& out,
+                                              std::span<const Aabb> boxes) const {
+  const auto coarse = [](const Coord& c) {
+    return Coord{uint16_t(c[0] >> kCoarseShift), uint16_t(c[1] >> kCoarseShift), uint16_t(c[2] >> kCoarseShift)};
+  };
+  const auto emit = [&](uint32_t a, uint32_t b) {
+    if (overlaps(boxes[a], boxes[b])) out.emplace_back(std::min(a, b), std::max(a, b));
+  };
+  std::vector<std::pair<uint64_t, uint32_t>>& index = coarse_scratch_;  // (coarse cell, overflow id), sorted
+  std::vector<uint32_t>& everywhere = everywhere_scratch_;             // sorted, as overflow_ids_
+  index.clear(), everywhere.clear();
+  for (uint32_t a : overflow_ids_) {
+    const Coord lo = coarse(entries_[a].lo), hi = coarse(entries_[a].hi);
+    if (cell_count(lo, hi) > kCoarseMaxCells) {
+      everywhere.push_back(a);
+      continue;
+    }
+    for (uint16_t z = lo[2]; z <= hi[2]; ++z)
+      for (uint16_t y = lo[1]; y <= hi[1]; ++y)
+        for (uint16_t x = lo[0]; x <= hi[0]; ++x) index.emplace_back(packed(Coord{x, y, z}), a);
+  }
+  std::sort(index.begin(), index.end());
+  const auto is_everywhere = [&](uint32_t id) { return std::binary_search(everywhere.begin(), everywhere.end(), id); };
+  // Those paired with everything: each other once.
+  for (uint32_t a : everywhere)
+    for (uint32_t b : present_ids_)
+      if (b != a && !(b < a && is_everywhere(b))) emit(a, b);
+  // Indexed overflow objects with each other: per coarse cell, the pairs
+  // whose first common coarse cell it is.
+  for (size_t g = 0; g < index.size();) {
+    size_t end = g;
+    while (end < index.size() && index[end].first == index[g].first) ++end;
+    for (size_t i = g; i < end; ++i)
+      for (size_t j = i + 1; j < end; ++j) {
+        const uint32_t a = index[i].second, b = index[j].second;
+        if (lane_max(packed(coarse(entries_[a].lo)), packed(coarse(entries_[b].lo))) == index[g].first) emit(a, b);
+      }
+    g = end;
+  }
+  // Indexed overflow objects with the objects in cells: each such object
+  // looks up its own coarse cells.
+  for (uint32_t b : present_ids_) {
+    const Entry& e = entries_[b];
+    if (e.overflow) continue;
+    const Coord lo = coarse(e.lo), hi = coarse(e.hi);
+    const uint64_t lb = packed(lo);
+    for (uint16_t z = lo[2]; z <= hi[2]; ++z)
+      for (uint16_t y = lo[1]; y <= hi[1]; ++y)
+        for (uint16_t x = lo[0]; x <= hi[0]; ++x) {
+          const uint64_t at = packed(Coord{x, y, z});
+          auto it = std::lower_bound(index.begin(), index.end(), std::pair<uint64_t, uint32_t>(at, 0));
+          for (; it != index.end() && it->first == at; ++it)
+            if (lane_max(packed(coarse(entries_[it->second].lo)), lb) == at) emit(it->second, b);
+        }
+  }
 }
 
 void WorldTree::candidate_pairs(std::vector<std::pair<uint32_t, uint32_t>>& out) const {

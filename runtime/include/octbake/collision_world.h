@@ -386,8 +386,10 @@ class OCTBAKE_API CollisionWorld {
   // Makes the area and depth of slot i current; returns areas computed.
   uint64_t refresh_depth(uint32_t i);
   uint64_t refresh_all_thesis();
-  template <class Stale>
-  uint64_t compute_areas(Stale stale, double& a_min, double& a_max);  // see the definition
+  template <class Stale, class Computed>
+  uint64_t compute_areas(Stale stale, Computed computed, double* range);  // see the definition
+  void set_depths_from(const double (&range)[2]);
+  int depth_in_range(const Slot& s, double a_min, double a_max) const;  // depth_for, clamped to the tree
   uint64_t refresh_legacy(bool all);
   PlacedTree placed(uint32_t i) const;
   void run_parallel(size_t count, size_t grain, RangeTask task);

@@ -24,7 +24,9 @@
 // |objects|, all linear; no pass over the world's single-object cells. When
 // the pairs are filtered by their boxes (overlapping_pairs, scan_part), a
 // cell of more than 32 is swept by box min x instead: a crowd in a shallow
-// world costs k log k plus the overlapping pairs, not k^2.
+// world costs k log k plus the overlapping pairs, not k^2. And once the
+// overflow set is large (kCoarseFrom), those scans pair it through coarse
+// cells instead of with every object.
 #pragma once
 #include <array>
 #include <cassert>
@@ -50,6 +52,13 @@ class OCTBAKE_API WorldTree {
 
   // An object spanning more cells than this is paired with everything instead.
   static constexpr uint64_t kMaxCells = 1024;
+  // Past this many (overflow objects x objects), the box-filtered scans pair
+  // the overflow objects through coarse cells of 2^kCoarseShift cells a side
+  // (those over more than kCoarseMaxCells of them still with everything): the
+  // cost is then about the objects' coarse cells, not the product.
+  static constexpr uint64_t kCoarseFrom = uint64_t(1) << 18;
+  static constexpr int kCoarseShift = 3;
+  static constexpr uint64_t kCoarseMaxCells = 4096;
 
   // Inserts object `id` or moves it to `box`. Returns true when its leaf set
   // (the cell range its box covers, clamped to the grid) changed, false when nothing needed re-inserting. A move that
@@ -229,6 +238,9 @@ class OCTBAKE_API WorldTree {
   // Appends the overflow pairs and sorts `out`.
   template <class Keep>
   void finish(std::vector<std::pair<uint32_t, uint32_t>>& out, Keep keep) const;
+  // finish()'s overflow pairs with overlapping boxes, through coarse cells.
+  void pair_overflow_by_coarse_cells(std::vector<std::pair<uint32_t, uint32_t>>& out,
+                                     std::span<const Aabb> boxes) const;
   // Moves `id` from the cells of entries_[id]'s range to those of [lo, hi],
   // touching only the cells that differ.
   void relink(uint32_t id, const Coord& lo, const Coord& hi, bool overflow);
@@ -279,6 +291,8 @@ class OCTBAKE_API WorldTree {
   std::vector<uint32_t> overflow_ids_;  // sorted
   std::vector<uint32_t> present_ids_;   // sorted
   mutable std::vector<std::pair<uint32_t, uint32_t>> sort_scratch_;  // candidate_pairs' radix sort
+  mutable std::vector<std::pair<uint64_t, uint32_t>> coarse_scratch_;  // pair_overflow_by_coarse_cells
+  mutable std::vector<uint32_t> everywhere_scratch_;                   // and its objects paired with all
 };
 
 // Inline: commit_poses runs these once per moved object.

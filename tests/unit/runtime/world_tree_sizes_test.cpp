@@ -269,6 +269,45 @@ TEST(WorldTreeSizes, CrowdedCellOfTouchingBoxesMatchesBruteForce) {
   EXPECT_GT(want.size(), 72u * 6);  // each lattice box touches its up to 26 neighbours
 }
 
+// Hundreds of objects too big for the cells (overflow), a few of them too
+// big even for the coarse cells, among small ones, some poking out of the
+// world: the box-filtered pairs (which then go through coarse cells) are
+// exactly the overlapping ones, through moves, at the origin and at 1e6.
+TEST(WorldTreeSizes, ManyOverflowObjectsMatchBruteForce) {
+  for (double offset : {0.0, 1e6}) {
+    const Eigen::Vector3d at = Eigen::Vector3d::Constant(offset);
+    const Aabb world{at, at + Eigen::Vector3d::Constant(256)};
+    WorldTree tree(world, /*depth=*/8);  // cells of 1, coarse cells of 8
+    std::mt19937 rng(77);
+    const auto box = [&](double lo, double hi, double spill) {
+      const Eigen::Vector3d h(uniform(rng, lo, hi), uniform(rng, lo, hi), uniform(rng, lo, hi));
+      const Eigen::Vector3d c(uniform(rng, -spill, 256 + spill), uniform(rng, -spill, 256 + spill),
+                              uniform(rng, -spill, 256 + spill));
+      return Aabb{at + c - h, at + c + h};
+    };
+    std::vector<Aabb> boxes;
+    for (int i = 0; i < 1000; ++i) boxes.push_back(box(0.1, 2, 4));  // in cells
+    for (int i = 0; i < 500; ++i) boxes.push_back(box(6, 20, 10));  // overflow: 12^3 cells and more
+    for (int i = 0; i < 4; ++i) boxes.push_back(box(90, 140, 0));  // over more than 4096 coarse cells
+    ASSERT_GT(uint64_t(500) * boxes.size(), WorldTree::kCoarseFrom);
+    for (int round = 0; round < 3; ++round) {
+      if (round > 0)
+        for (size_t i = round; i < boxes.size(); i += 3) {
+          const Eigen::Vector3d d(uniform(rng, -3, 3), uniform(rng, -3, 3), uniform(rng, -3, 3));
+          boxes[i] = {boxes[i].min + d, boxes[i].max + d};
+        }
+      for (uint32_t i = 0; i < boxes.size(); ++i) tree.update(i, boxes[i]);
+      EXPECT_GE(tree.overflow_ids().size(), 480u);
+      Pairs want;
+      for (uint32_t a = 0; a < boxes.size(); ++a)
+        for (uint32_t b = a + 1; b < boxes.size(); ++b)
+          if (overlaps(boxes[a], boxes[b])) want.emplace_back(a, b);
+      expect_overlapping_pairs(tree, boxes, want);
+      EXPECT_GT(want.size(), 2000u) << "offset " << offset << " round " << round;
+    }
+  }
+}
+
 // A needle grows from a speck to the world's width and back (256 x 2 x 2
 // cells at most: never overflow): its pairs with a few fixed small objects
 // are exactly the overlapping ones at every step, and a ray along it finds it.
