@@ -29,8 +29,8 @@ namespace {
 // object's own extent, as collide() pads its boxes, plus kWorldRoundingPad of
 // the world coordinates, whose rounding (~1e-16 of them, in position + offset)
 // it covers ~4,500 times over. The second term used to be kRelativePad too:
-// at 1e6 it padded 1e-3-sized objects by their own size (10x the candidate
-// pairs, 2.2x the frame).
+// at 1e6 it padded 1e-3-sized objects by their own size (test1 scaled by 1e-3
+// at 1e6: 6x the candidate pairs, 9.0 against 6.6 µs a frame).
 constexpr double kRelativePad = 1e-9;
 constexpr double kWorldRoundingPad = 1e-12;
 // Items per parallel chunk: enough work per chunk to pay for handing it out.
