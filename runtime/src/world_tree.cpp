@@ -503,19 +503,20 @@ void WorldTree::scan_cells(size_t begin, size_t end, Keep keep, Emit emit) const
 template <class Keep>
 void WorldTree::finish(std::vector<std::pair<uint32_t, uint32_t>>& out, Keep keep) const {
   // Overflow objects are in no cell, so these never repeat a cell pair.
-  bool done = false;
+  std::span<const uint32_t> with_all = overflow_ids_;
   if constexpr (std::is_same_v<Keep, BoxesOverlap>)
-    if (uint64_t(overflow_ids_.size()) * present_ids_.size() > kCoarseFrom) {
-      pair_overflow_by_coarse_cells(out, keep.boxes);
-      done = true;
+    if (uint64_t(overflow_ids_.size()) * present_ids_.size() > kCoarseFrom)
+      with_all = pair_overflow_by_coarse_cells(out, keep.boxes);
+  const bool all_overflow = with_all.size() == overflow_ids_.size();
+  for (uint32_t a : with_all)
+    for (uint32_t b : present_ids_) {
+      // Two of `with_all` once (both are overflow, and it is sorted).
+      if (b == a || (b < a && entries_[b].overflow &&
+                     (all_overflow || std::binary_search(with_all.begin(), with_all.end(), b))))
+        continue;
+      const uint32_t lo = std::min(a, b), hi = std::max(a, b);
+      if (keep(lo, hi)) out.emplace_back(lo, hi);
     }
-  if (!done)
-    for (uint32_t a : overflow_ids_)
-      for (uint32_t b : present_ids_) {
-        if (b == a || (entries_[b].overflow && b < a)) continue;  // an overflow pair once
-        const uint32_t lo = std::min(a, b), hi = std::max(a, b);
-        if (keep(lo, hi)) out.emplace_back(lo, hi);
-      }
   // The radix sort's fixed cost (8 count tables) only pays off on many pairs.
   if (out.size() < kRadixFrom)
     std::sort(out.begin(), out.end());
@@ -527,13 +528,24 @@ void WorldTree::finish(std::vector<std::pair<uint32_t, uint32_t>>& out, Keep kee
 // side), each object over its cell range shifted down: a pair that overlaps
 // shares a cell, hence a coarse cell, and is taken in its first common coarse
 // cell only (the cell pairs' rule, one level up). An overflow object over
-// more than kCoarseMaxCells coarse cells is paired with every object as
-// before.
-void WorldTree::pair_overflow_by_coarse_cells(std::vector<std::pair<uint32_t, uint32_t>>& out,
+// more than kCoarseMaxCells coarse cells is left to pair with every object,
+// and so is every one, nothing done, when listing them would cost more than
+// that (very large ones among few objects). Returns those left, sorted.
+std::span<const uint32_t> WorldTree::pair_overflow_by_coarse_cells(std::vector<std::pair<uint32_t, uint32_t>>& out,
                                               std::span<const Aabb> boxes) const {
   const auto coarse = [](const Coord& c) {
     return Coord{uint16_t(c[0] >> kCoarseShift), uint16_t(c[1] >> kCoarseShift), uint16_t(c[2] >> kCoarseShift)};
   };
+  // Costs in plain pair checks (measured: a listed entry's sort ~16, an
+  // object's lookups ~4, a pair sharing a coarse cell ~1), against the one
+  // check per (overflow object, object) this replaces. Huge overflow objects
+  // that overlap each other can cost more here, so this is checked twice.
+  const uint64_t plain = uint64_t(overflow_ids_.size()) * present_ids_.size();
+  const uint64_t lookups = 4 * uint64_t(present_ids_.size());
+  uint64_t listed = 0;
+  for (uint32_t a : overflow_ids_)
+    if (const uint64_t c = cell_count(coarse(entries_[a].lo), coarse(entries_[a].hi)); c <= kCoarseMaxCells) listed += c;
+  if (16 * listed + lookups >= plain) return overflow_ids_;
   const auto emit = [&](uint32_t a, uint32_t b) {
     if (overlaps(boxes[a], boxes[b])) out.emplace_back(std::min(a, b), std::max(a, b));
   };
@@ -551,11 +563,12 @@ void WorldTree::pair_overflow_by_coarse_cells(std::vector<std::pair<uint32_t, ui
         for (uint16_t x = lo[0]; x <= hi[0]; ++x) index.emplace_back(packed(Coord{x, y, z}), a);
   }
   std::sort(index.begin(), index.end());
-  const auto is_everywhere = [&](uint32_t id) { return std::binary_search(everywhere.begin(), everywhere.end(), id); };
-  // Those paired with everything: each other once.
-  for (uint32_t a : everywhere)
-    for (uint32_t b : present_ids_)
-      if (b != a && !(b < a && is_everywhere(b))) emit(a, b);
+  uint64_t sharing = 0;  // pairs of entries in one coarse cell
+  for (size_t g = 0, end; g < index.size(); g = end) {
+    for (end = g + 1; end < index.size() && index[end].first == index[g].first;) ++end;
+    sharing += (end - g) * (end - g - 1) / 2;
+  }
+  if (sharing + lookups >= plain) return overflow_ids_;
   // Indexed overflow objects with each other: per coarse cell, the pairs
   // whose first common coarse cell it is.
   for (size_t g = 0; g < index.size();) {
@@ -584,6 +597,7 @@ void WorldTree::pair_overflow_by_coarse_cells(std::vector<std::pair<uint32_t, ui
             if (lane_max(packed(coarse(entries_[it->second].lo)), lb) == at) emit(it->second, b);
         }
   }
+  return everywhere;
 }
 
 void WorldTree::candidate_pairs(std::vector<std::pair<uint32_t, uint32_t>>& out) const {

@@ -146,6 +146,49 @@ void BM_CandidatePairs(benchmark::State& state) {
 }
 BENCHMARK(BM_CandidatePairs)->ArgName("objects")->Arg(210)->Arg(10'000)->Arg(100'000)->Unit(benchmark::kMicrosecond);
 
+// The box-filtered broadphase with many objects too big for their cells
+// (overflow), in a 256-wide world of depth 8, shapes chosen around the cost
+// guard of the overflow pairing (WorldTree::pair_overflow_by_coarse_cells):
+// 0: 1,000 small + 500 overflow (12-40 cells wide) + 4 huge: coarse cells pay;
+// 1: 3,000 small + 100 overflow ~110 cells wide: pairing with all is cheaper;
+// 2: 2,000 small + 1,000 overflow 28 cells wide in one spot: they share
+//    coarse cells so much that pairing with all is cheaper;
+// 3: 10,000 small + 40 overflow: coarse cells pay.
+void BM_OverflowPairs(benchmark::State& state) {
+  const int shape = int(state.range(0));
+  std::mt19937 rng(77);
+  const auto uniform = [&](double lo, double hi) { return lo + (hi - lo) * unit(rng); };
+  const auto box = [&](double lo, double hi, double spill) {
+    const Eigen::Vector3d h(uniform(lo, hi), uniform(lo, hi), uniform(lo, hi));
+    const Eigen::Vector3d c(uniform(-spill, 256 + spill), uniform(-spill, 256 + spill), uniform(-spill, 256 + spill));
+    return Aabb{c - h, c + h};
+  };
+  std::vector<Aabb> boxes;
+  const auto add = [&](int n, double lo, double hi, double spill) {
+    for (int i = 0; i < n; ++i) boxes.push_back(box(lo, hi, spill));
+  };
+  if (shape == 0) add(1000, 0.1, 2, 4), add(500, 6, 20, 10), add(4, 90, 140, 0);
+  if (shape == 1) add(3000, 0.1, 2, 4), add(100, 50, 60, 0);
+  if (shape == 2) {
+    add(2000, 0.1, 2, 4);
+    for (int i = 0; i < 1000; ++i) {
+      const Eigen::Vector3d c(uniform(120, 136), uniform(120, 136), uniform(120, 136));
+      boxes.push_back({c.array() - 14, c.array() + 14});
+    }
+  }
+  if (shape == 3) add(10000, 0.1, 2, 4), add(40, 6, 10, 10);
+  WorldTree tree(Aabb{Eigen::Vector3d::Zero(), Eigen::Vector3d::Constant(256)}, 8);
+  for (uint32_t i = 0; i < boxes.size(); ++i) tree.update(i, boxes[i]);
+  std::vector<std::pair<uint32_t, uint32_t>> pairs;
+  for (auto _ : state) {
+    tree.overlapping_pairs(boxes, pairs);
+    benchmark::DoNotOptimize(pairs.data());
+  }
+  state.counters["pairs"] = double(pairs.size());
+  state.counters["overflow"] = double(tree.overflow_ids().size());
+}
+BENCHMARK(BM_OverflowPairs)->ArgName("shape")->DenseRange(0, 3)->Unit(benchmark::kMicrosecond);
+
 // ---- the app-driven world ----
 
 constexpr double kDt = 1.0 / 30.0;

@@ -55,7 +55,9 @@ class OCTBAKE_API WorldTree {
   // Past this many (overflow objects x objects), the box-filtered scans pair
   // the overflow objects through coarse cells of 2^kCoarseShift cells a side
   // (those over more than kCoarseMaxCells of them still with everything): the
-  // cost is then about the objects' coarse cells, not the product.
+  // cost is then about the objects' coarse cells, not the product. Where the
+  // coarse cells would cost more (huge overflow objects, or many sharing
+  // coarse cells), all are still paired with everything.
   static constexpr uint64_t kCoarseFrom = uint64_t(1) << 18;
   static constexpr int kCoarseShift = 3;
   static constexpr uint64_t kCoarseMaxCells = 4096;
@@ -238,8 +240,9 @@ class OCTBAKE_API WorldTree {
   // Appends the overflow pairs and sorts `out`.
   template <class Keep>
   void finish(std::vector<std::pair<uint32_t, uint32_t>>& out, Keep keep) const;
-  // finish()'s overflow pairs with overlapping boxes, through coarse cells.
-  void pair_overflow_by_coarse_cells(std::vector<std::pair<uint32_t, uint32_t>>& out,
+  // finish()'s overflow pairs with overlapping boxes, through coarse cells;
+  // returns the overflow objects it leaves to pair with every object.
+  std::span<const uint32_t> pair_overflow_by_coarse_cells(std::vector<std::pair<uint32_t, uint32_t>>& out,
                                      std::span<const Aabb> boxes) const;
   // Moves `id` from the cells of entries_[id]'s range to those of [lo, hi],
   // touching only the cells that differ.

@@ -308,6 +308,41 @@ TEST(WorldTreeSizes, ManyOverflowObjectsMatchBruteForce) {
   }
 }
 
+// Overflow objects whose coarse cells would cost more than pairing them with
+// every object: a hundred huge ones (too many coarse cells in all), and 600
+// in one spot (too many of them per coarse cell, found only once their index
+// is sorted). Either way all their pairs come from pairing with everything,
+// also for the few beyond kCoarseMaxCells: exactly the overlapping boxes.
+TEST(WorldTreeSizes, OverflowObjectsLeftToPairWithAllMatchBruteForce) {
+  for (int shape : {0, 1}) {
+    const Aabb world{{0, 0, 0}, {256, 256, 256}};
+    WorldTree tree(world, /*depth=*/8);
+    std::mt19937 rng(5 + shape);
+    std::vector<Aabb> boxes;
+    const auto add = [&](int n, double lo, double hi, double from, double to) {
+      for (int i = 0; i < n; ++i) {
+        const Eigen::Vector3d h(uniform(rng, lo, hi), uniform(rng, lo, hi), uniform(rng, lo, hi));
+        const Eigen::Vector3d c(uniform(rng, from, to), uniform(rng, from, to), uniform(rng, from, to));
+        boxes.push_back({c - h, c + h});
+      }
+    };
+    add(shape == 0 ? 3000 : 1500, 0.1, 2, -4, 260);  // in cells
+    if (shape == 0) add(100, 50, 60, 0, 256);        // ~3,000 coarse cells each
+    if (shape == 1) add(600, 14, 14, 120, 136);      // ~100 coarse cells each, all in ~200
+    add(2, 100, 120, 0, 256);                        // over kCoarseMaxCells
+    const size_t overflow = boxes.size() - (shape == 0 ? 3000 : 1500);
+    ASSERT_GT(uint64_t(overflow) * boxes.size(), WorldTree::kCoarseFrom);
+    for (uint32_t i = 0; i < boxes.size(); ++i) tree.update(i, boxes[i]);
+    EXPECT_EQ(tree.overflow_ids().size(), overflow);
+    Pairs want;
+    for (uint32_t a = 0; a < boxes.size(); ++a)
+      for (uint32_t b = a + 1; b < boxes.size(); ++b)
+        if (overlaps(boxes[a], boxes[b])) want.emplace_back(a, b);
+    expect_overlapping_pairs(tree, boxes, want);
+    EXPECT_GT(want.size(), shape == 0 ? 4000u : 100000u) << "shape " << shape;
+  }
+}
+
 // A needle grows from a speck to the world's width and back (256 x 2 x 2
 // cells at most: never overflow): its pairs with a few fixed small objects
 // are exactly the overlapping ones at every step, and a ray along it finds it.
