@@ -125,14 +125,6 @@ int WorldTree::leave_cell(uint32_t slot, uint32_t id) {
   return -int(cell.ids.empty());
 }
 
-void WorldTree::drop_empty_cells() {
-  const size_t empty = table_used_ - occupied_;
-  if (empty <= std::max<size_t>(occupied_, 256)) return;
-  // Slot order keeps the free list (hence later numbering) deterministic.
-  for (uint32_t slot = 0; slot < cells_.size(); ++slot)
-    if (cells_[slot].linked && cells_[slot].ids.empty()) free_cell(slot);
-}
-
 // Takes the cell out of the table (so a long run over a deep world does not
 // accumulate cells) and lists its slot for reuse.
 void WorldTree::free_cell(uint32_t slot) {
@@ -168,7 +160,7 @@ void WorldTree::relink(uint32_t id, const Coord& lo, const Coord& hi, bool overf
     size_t i = 0;
     for_each_cell(e.lo, e.hi, [&](const Coord& c) {
       const uint32_t slot = old_cells_[i++];
-      if (overflow || !inside(c, lo, hi)) occupied_ += leave_cell(slot, id);
+      if (overflow || !inside(c, lo, hi)) leave_and_list(slot, id);
     });
   }
   if (!overflow)
@@ -186,6 +178,24 @@ void WorldTree::relink(uint32_t id, const Coord& lo, const Coord& hi, bool overf
   e.overflow = overflow;
   e.present = true;
   lo_[id] = packed(lo);
+}
+
+void WorldTree::leave_and_list(uint32_t slot, uint32_t id) {
+  if (leave_cell(slot, id) != 0) {
+    --occupied_;
+    emptied_.push_back(slot);
+  }
+}
+
+// Frees the cells listed as emptied that still are, in list order: the free
+// list then serves the next cells made, so the table and the cells stay the
+// size of the occupied cells. (Left to pile up until they outnumbered the
+// occupied ones, a moving crowd's empty cells grew both first: at ~850k
+// cells a 200-400 ms frame, mostly fresh memory, then a pass over them all.)
+void WorldTree::free_emptied() {
+  for (uint32_t slot : emptied_)
+    if (cells_[slot].linked && cells_[slot].ids.empty()) free_cell(slot);
+  emptied_.clear();
 }
 
 bool WorldTree::update(uint32_t id, const Aabb& box) { return update_cells(id, cell_range(box)); }
@@ -214,7 +224,7 @@ bool WorldTree::needs_update(uint32_t id, const Aabb& box) const {
 
 bool WorldTree::update_cells(uint32_t id, const CellRange& r) {
   const bool changed = move_one(id, r);
-  drop_empty_cells();
+  free_emptied();
   return changed;
 }
 
@@ -238,10 +248,10 @@ void WorldTree::remove(uint32_t id) {
   if (!contains(id)) return;
   Entry& e = entries_[id];
   if (e.overflow) erase_sorted(overflow_ids_, id);
-  for (uint32_t slot : e.cells) occupied_ += leave_cell(slot, id);
+  for (uint32_t slot : e.cells) leave_and_list(slot, id);
   e = Entry{};
   erase_sorted(present_ids_, id);
-  drop_empty_cells();
+  free_emptied();
 }
 
 // ---- the batch ----
@@ -373,20 +383,19 @@ void WorldTree::update_cells(std::span<const uint32_t> ids, std::span<const Cell
     for (size_t k = b; k < e; ++k)
       if (moves_[k].kind == MoveKind::fast) finish_move(ids[k], ranges[k], moves_[k]);
   });
-  // 5. The cells the moves emptied are freed, in k order (the free list, hence
-  // later numbering, does not depend on the parts), unless refilled: the free
-  // list then serves the next batch's new cells and the cells never outgrow
-  // the most ever occupied (a warmed-up frame allocates nothing). The slow
-  // moves' empties wait for drop_empty_cells.
+  // 5. The cells the moves emptied are freed, unless refilled: the slow
+  // moves' (listed in 2), then the fast ones' in k order (the free list, hence
+  // later numbering, does not depend on the parts). Not sooner: the slots
+  // planned in 1 must stay valid. The free list then serves the next batch's
+  // new cells and the cells never outgrow the most ever occupied (a
+  // warmed-up frame allocates nothing).
   for (size_t k = 0; k < n; ++k) {
     const Move& m = moves_[k];
     if (m.kind != MoveKind::fast) continue;
-    for (int i = 0; i < m.leaves; ++i) {
-      const uint32_t slot = m.leave[i];
-      if (m.emptied[i] && cells_[slot].linked && cells_[slot].ids.empty()) free_cell(slot);
-    }
+    for (int i = 0; i < m.leaves; ++i)
+      if (m.emptied[i]) emptied_.push_back(m.leave[i]);
   }
-  drop_empty_cells();
+  free_emptied();
 }
 
 namespace {

@@ -141,6 +141,9 @@ class OCTBAKE_API WorldTree {
   int depth() const { return depth_; }
   const Aabb& bounds() const { return world_; }
   uint64_t reinsertions() const { return reinsertions_; }
+  // Cells in the table: after every update(), update_cells() and remove(),
+  // exactly the cells holding an object (those left empty are freed).
+  size_t cells_in_use() const { return table_used_; }
   bool contains(uint32_t id) const { return id < entries_.size() && entries_[id].present; }
   bool in_overflow(uint32_t id) const { return contains(id) && entries_[id].overflow; }
 
@@ -247,7 +250,7 @@ class OCTBAKE_API WorldTree {
   // Moves `id` from the cells of entries_[id]'s range to those of [lo, hi],
   // touching only the cells that differ.
   void relink(uint32_t id, const Coord& lo, const Coord& hi, bool overflow);
-  bool move_one(uint32_t id, const CellRange& range);  // update_cells without dropping empty cells
+  bool move_one(uint32_t id, const CellRange& range);  // update_cells but free_emptied()
   // The batch's phases (see update_cells(ids, ...)).
   void plan_move(uint32_t id, const CellRange& range, Move& m) const;
   void apply_moves(std::span<const uint32_t> ids, size_t part, size_t parts);
@@ -258,11 +261,12 @@ class OCTBAKE_API WorldTree {
   uint32_t cell_slot(const Coord& at);  // finds or creates
   size_t table_find(uint32_t key) const;
   void table_grow();
-  // Emptied cells stay in the table while a batch runs (its plan holds slots
-  // looked up before); the batch frees those its fast moves emptied at its
-  // end, and the others (left by update(), remove() and slow moves) are
-  // dropped all at once when they outnumber the occupied ones.
-  void drop_empty_cells();
+  // leave_cell, the cell listed in emptied_ if it was the last one out.
+  void leave_and_list(uint32_t slot, uint32_t id);
+  // Frees emptied_'s cells that are still empty. update() and remove() call
+  // it at their end; a batch at its end only (its plan holds slots looked up
+  // before).
+  void free_emptied();
   void free_cell(uint32_t slot);
 
   Aabb world_;
@@ -291,6 +295,7 @@ class OCTBAKE_API WorldTree {
   size_t occupied_ = 0;  // cells holding an object (the rest of table_used_ are empty)
   std::vector<Move> moves_;         // the batch's plan, per item
   std::vector<uint32_t> old_cells_;  // relink's copy of an entry's cells
+  std::vector<uint32_t> emptied_;    // cells left empty, to free (free_emptied)
   std::vector<uint32_t> overflow_ids_;  // sorted
   std::vector<uint32_t> present_ids_;   // sorted
   mutable std::vector<std::pair<uint32_t, uint32_t>> sort_scratch_;  // candidate_pairs' radix sort

@@ -217,6 +217,19 @@ TEST_P(WorldTreeSizes, MixedSizesGrowingAndShrinkingMatchBruteForce) {
         for (WorldTree& b : batched) b.remove(i);
         present[i] = false;
       }
+    // The table holds exactly the occupied cells: none left empty piles up.
+    std::vector<uint64_t> occupied;
+    for (uint32_t i = 0; i < n; ++i) {
+      if (!present[i] || g.overflow(boxes[i])) continue;
+      for (int z = g.cell(boxes[i].min[2], 2); z <= g.cell(boxes[i].max[2], 2); ++z)
+        for (int y = g.cell(boxes[i].min[1], 1); y <= g.cell(boxes[i].max[1], 1); ++y)
+          for (int x = g.cell(boxes[i].min[0], 0); x <= g.cell(boxes[i].max[0], 0); ++x)
+            occupied.push_back((uint64_t(z) << 40) | (uint64_t(y) << 20) | uint64_t(x));
+    }
+    std::sort(occupied.begin(), occupied.end());
+    const size_t cells = size_t(std::unique(occupied.begin(), occupied.end()) - occupied.begin());
+    EXPECT_EQ(one.cells_in_use(), cells) << "round " << round;
+    for (const WorldTree& b : batched) EXPECT_EQ(b.cells_in_use(), cells) << "round " << round;
     std::mt19937 r1(round);
     overlapping += check(g, one, boxes, present, r1);
     for (size_t t = 0; t < parts.size(); ++t) {
