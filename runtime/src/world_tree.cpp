@@ -238,7 +238,7 @@ bool WorldTree::move_one(uint32_t id, const CellRange& r) {
     if (!needs_update(id, r)) return false;
     ++reinsertions_;
   } else {
-    insert_sorted(present_ids_, id);
+    ++present_;
   }
   relink(id, r.lo, r.hi, r.overflow);
   return true;
@@ -250,7 +250,7 @@ void WorldTree::remove(uint32_t id) {
   if (e.overflow) erase_sorted(overflow_ids_, id);
   for (uint32_t slot : e.cells) leave_and_list(slot, id);
   e = Entry{};
-  erase_sorted(present_ids_, id);
+  --present_;
   free_emptied();
 }
 
@@ -514,14 +514,15 @@ void WorldTree::finish(std::vector<std::pair<uint32_t, uint32_t>>& out, Keep kee
   // Overflow objects are in no cell, so these never repeat a cell pair.
   std::span<const uint32_t> with_all = overflow_ids_;
   if constexpr (std::is_same_v<Keep, BoxesOverlap>)
-    if (uint64_t(overflow_ids_.size()) * present_ids_.size() > kCoarseFrom)
+    if (uint64_t(overflow_ids_.size()) * present_ > kCoarseFrom)
       with_all = pair_overflow_by_coarse_cells(out, keep.boxes);
   const bool all_overflow = with_all.size() == overflow_ids_.size();
   for (uint32_t a : with_all)
-    for (uint32_t b : present_ids_) {
+    for (uint32_t b = 0; b < entries_.size(); ++b) {
       // Two of `with_all` once (both are overflow, and it is sorted).
-      if (b == a || (b < a && entries_[b].overflow &&
-                     (all_overflow || std::binary_search(with_all.begin(), with_all.end(), b))))
+      const Entry& e = entries_[b];
+      if (!e.present || b == a ||
+          (b < a && e.overflow && (all_overflow || std::binary_search(with_all.begin(), with_all.end(), b))))
         continue;
       const uint32_t lo = std::min(a, b), hi = std::max(a, b);
       if (keep(lo, hi)) out.emplace_back(lo, hi);
@@ -549,8 +550,8 @@ std::span<const uint32_t> WorldTree::pair_overflow_by_coarse_cells(std::vector<s
   // object's lookups ~4, a pair sharing a coarse cell ~1), against the one
   // check per (overflow object, object) this replaces. Huge overflow objects
   // that overlap each other can cost more here, so this is checked twice.
-  const uint64_t plain = uint64_t(overflow_ids_.size()) * present_ids_.size();
-  const uint64_t lookups = 4 * uint64_t(present_ids_.size());
+  const uint64_t plain = uint64_t(overflow_ids_.size()) * present_;
+  const uint64_t lookups = 4 * uint64_t(present_);
   uint64_t listed = 0;
   for (uint32_t a : overflow_ids_)
     if (const uint64_t c = cell_count(coarse(entries_[a].lo), coarse(entries_[a].hi)); c <= kCoarseMaxCells) listed += c;
@@ -592,9 +593,9 @@ std::span<const uint32_t> WorldTree::pair_overflow_by_coarse_cells(std::vector<s
   }
   // Indexed overflow objects with the objects in cells: each such object
   // looks up its own coarse cells.
-  for (uint32_t b : present_ids_) {
+  for (uint32_t b = 0; b < entries_.size(); ++b) {
     const Entry& e = entries_[b];
-    if (e.overflow) continue;
+    if (!e.present || e.overflow) continue;
     const Coord lo = coarse(e.lo), hi = coarse(e.hi);
     const uint64_t lb = packed(lo);
     for (uint16_t z = lo[2]; z <= hi[2]; ++z)

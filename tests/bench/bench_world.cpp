@@ -338,6 +338,38 @@ BENCHMARK(BM_Detect)
     ->Iterations(kFrames100k)
     ->Unit(benchmark::kMicrosecond);
 
+// Objects coming and going: every frame a hundredth of the objects is
+// destroyed (random ones) and as many are created at random places in the
+// world, then detect() runs (one thread, app-set camera fixed). The frame
+// the app sees: its destroys, creates and the detect.
+void BM_Churn(benchmark::State& state) {
+  const Scene scene = make_scene(int(state.range(0)));
+  CollisionWorld world(collision_settings(scene, LodPolicy::screen));
+  std::vector<ObjectHandle> live;
+  for (const ObjectDesc& o : scene.objects) live.push_back(world.create(TreeSource::fixed(o.tree), o.pose).value());
+  std::vector<Contact> contacts;
+  world.detect(contacts);
+  std::mt19937 rng(9);
+  const size_t churn = live.size() / 100;
+  const double extent = scene.settings.bounds.max.x();
+  uint64_t allocations = 0;
+  for (auto _ : state) {
+    const uint64_t before = g_allocations.load();
+    for (size_t k = 0; k < churn; ++k) {
+      const size_t i = rng() % live.size();
+      (void)world.destroy(live[i]);
+      Pose pose;
+      pose.position = Eigen::Vector3d(unit(rng), unit(rng), unit(rng)) * extent;
+      live[i] = world.create(TreeSource::fixed(&scene.trees[rng() % scene.trees.size()]), pose).value();
+    }
+    world.detect(contacts);
+    allocations += g_allocations.load() - before;
+  }
+  state.counters["churn_per_frame"] = double(churn);
+  state.counters["allocs_per_frame"] = double(allocations) / double(state.iterations());
+}
+BENCHMARK(BM_Churn)->ArgName("objects")->Arg(10'000)->Arg(100'000)->Unit(benchmark::kMicrosecond);
+
 // Two threads against one, paired: two worlds on the same poses, one on one
 // thread and one on two, taking turns in blocks of kPairedBlock frames (which
 // side goes first alternates), so both sides see the same minutes of a shared,

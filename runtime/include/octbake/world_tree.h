@@ -297,7 +297,7 @@ class OCTBAKE_API WorldTree {
   std::vector<uint32_t> old_cells_;  // relink's copy of an entry's cells
   std::vector<uint32_t> emptied_;    // cells left empty, to free (free_emptied)
   std::vector<uint32_t> overflow_ids_;  // sorted
-  std::vector<uint32_t> present_ids_;   // sorted
+  size_t present_ = 0;                  // objects in the tree (entries_ present)
   mutable std::vector<std::pair<uint32_t, uint32_t>> sort_scratch_;  // candidate_pairs' radix sort
   mutable std::vector<std::pair<uint64_t, uint32_t>> coarse_scratch_;  // pair_overflow_by_coarse_cells
   mutable std::vector<uint32_t> everywhere_scratch_;                   // and its objects paired with all
