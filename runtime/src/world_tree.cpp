@@ -1,7 +1,6 @@
 #include "octbake/world_tree.h"
 
 #include <algorithm>
-#include <atomic>
 #include <bit>
 #include <cassert>
 #include <cmath>
@@ -111,18 +110,17 @@ uint32_t WorldTree::cell_slot(const Coord& at) {
   return slot;
 }
 
-int WorldTree::enter_cell(uint32_t slot, uint32_t id) {
+void WorldTree::enter_cell(uint32_t slot, uint32_t id) {
   Cell& cell = cells_[slot];
   insert_sorted(cell.ids, id);
   if (cell.ids.size() == 2) busy_[slot / 64] |= uint64_t(1) << (slot % 64);
-  return cell.ids.size() == 1;
 }
 
-int WorldTree::leave_cell(uint32_t slot, uint32_t id) {
+bool WorldTree::leave_cell(uint32_t slot, uint32_t id) {
   Cell& cell = cells_[slot];
   erase_sorted(cell.ids, id);
   if (cell.ids.size() < 2) busy_[slot / 64] &= ~(uint64_t(1) << (slot % 64));
-  return -int(cell.ids.empty());
+  return cell.ids.empty();
 }
 
 // Takes the cell out of the table (so a long run over a deep world does not
@@ -170,7 +168,7 @@ void WorldTree::relink(uint32_t id, const Coord& lo, const Coord& hi, bool overf
         return;
       }
       const uint32_t slot = cell_slot(c);
-      occupied_ += enter_cell(slot, id);
+      enter_cell(slot, id);
       e.cells.push_back(slot);
     });
   e.lo = lo;
@@ -181,10 +179,7 @@ void WorldTree::relink(uint32_t id, const Coord& lo, const Coord& hi, bool overf
 }
 
 void WorldTree::leave_and_list(uint32_t slot, uint32_t id) {
-  if (leave_cell(slot, id) != 0) {
-    --occupied_;
-    emptied_.push_back(slot);
-  }
+  if (leave_cell(slot, id)) emptied_.push_back(slot);
 }
 
 // Frees the cells listed as emptied that still are, in list order: the free
@@ -310,20 +305,14 @@ void WorldTree::apply_moves(std::span<const uint32_t> ids, size_t part, size_t p
   // This part's words: [first, end) (the slots 64 times that).
   const uint64_t words = busy_.size(), first = words * part / parts, end = words * (part + 1) / parts;
   const auto mine = [&](uint32_t slot) { return slot / 64 >= first && slot / 64 < end; };
-  int occupied = 0;
   for (size_t k = 0; k < ids.size(); ++k) {
     Move& m = moves_[k];
     if (m.kind != MoveKind::fast) continue;
     for (int i = 0; i < m.leaves; ++i)
-      if (mine(m.leave[i])) {
-        const int left = leave_cell(m.leave[i], ids[k]);
-        m.emptied[i] = left != 0;  // this op's own byte: no other part writes it
-        occupied += left;
-      }
+      if (mine(m.leave[i])) m.emptied[i] = leave_cell(m.leave[i], ids[k]);  // this op's own byte
     for (int i = 0; i < m.enters; ++i)
-      if (mine(m.enter[i])) occupied += enter_cell(m.enter[i], ids[k]);
+      if (mine(m.enter[i])) enter_cell(m.enter[i], ids[k]);
   }
-  std::atomic_ref<size_t>(occupied_).fetch_add(size_t(ptrdiff_t(occupied)), std::memory_order_relaxed);
 }
 
 // The object's own entry: its new cell list, in [lo, hi] order.

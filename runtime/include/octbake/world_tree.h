@@ -255,13 +255,12 @@ class OCTBAKE_API WorldTree {
   void plan_move(uint32_t id, const CellRange& range, Move& m) const;
   void apply_moves(std::span<const uint32_t> ids, size_t part, size_t parts);
   void finish_move(uint32_t id, const CellRange& range, const Move& m);
-  // Both return the change in occupied_ (a cell becoming (non-)empty).
-  int enter_cell(uint32_t slot, uint32_t id);
-  int leave_cell(uint32_t slot, uint32_t id);
+  void enter_cell(uint32_t slot, uint32_t id);
+  bool leave_cell(uint32_t slot, uint32_t id);  // true: the cell is left empty
   uint32_t cell_slot(const Coord& at);  // finds or creates
   size_t table_find(uint32_t key) const;
   void table_grow();
-  // leave_cell, the cell listed in emptied_ if it was the last one out.
+  // leave_cell, the cell listed in emptied_ if left empty.
   void leave_and_list(uint32_t slot, uint32_t id);
   // Frees emptied_'s cells that are still empty. update() and remove() call
   // it at their end; a batch at its end only (its plan holds slots looked up
@@ -292,7 +291,6 @@ class OCTBAKE_API WorldTree {
   // (packed coord + 1) << 32 | slot, 0 when empty. Never iterated.
   std::vector<uint64_t> table_;
   size_t table_used_ = 0;
-  size_t occupied_ = 0;  // cells holding an object (the rest of table_used_ are empty)
   std::vector<Move> moves_;         // the batch's plan, per item
   std::vector<uint32_t> old_cells_;  // relink's copy of an entry's cells
   std::vector<uint32_t> emptied_;    // cells left empty, to free (free_emptied)
