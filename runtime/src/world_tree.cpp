@@ -14,7 +14,7 @@ namespace octbake {
 
 namespace {
 
-constexpr size_t kCellReserve = 8, kEntryReserve = 8;
+constexpr size_t kEntryReserve = 8;
 constexpr size_t kRadixFrom = 256;
 
 void insert_sorted(std::vector<uint32_t>& v, uint32_t id) {
@@ -27,6 +27,48 @@ void erase_sorted(std::vector<uint32_t>& v, uint32_t id) {
 }
 
 }  // namespace
+
+void WorldTree::CellIds::insert_sorted(uint32_t id) {
+  if (size_ == cap_) {
+    uint32_t* grown = new uint32_t[2 * size_t(cap_)];
+    std::copy(begin(), end(), grown);
+    release();
+    heap_ = grown;
+    cap_ *= 2;
+  }
+  uint32_t* d = data();
+  uint32_t* at = std::lower_bound(d, d + size_, id);
+  std::copy_backward(at, d + size_, d + size_ + 1);
+  *at = id;
+  ++size_;
+}
+
+void WorldTree::CellIds::erase_sorted(uint32_t id) {
+  uint32_t* d = data();
+  uint32_t* at = std::lower_bound(d, d + size_, id);
+  if (at == d + size_ || *at != id) return;
+  std::copy(at + 1, d + size_, at);
+  --size_;
+}
+
+void WorldTree::CellIds::assign(const CellIds& o) {
+  size_ = o.size_, cap_ = o.cap_;
+  if (on_heap()) heap_ = new uint32_t[cap_];
+  std::copy(o.begin(), o.end(), data());
+}
+
+void WorldTree::CellIds::take(CellIds& o) {
+  size_ = o.size_, cap_ = o.cap_;
+  if (on_heap())
+    heap_ = o.heap_;
+  else
+    std::copy(o.in_, o.in_ + kInline, in_);
+  o.size_ = 0, o.cap_ = kInline;
+}
+
+void WorldTree::CellIds::release() {
+  if (on_heap()) delete[] heap_;
+}
 
 WorldTree::WorldTree(const Aabb& world, int depth) : world_(world), depth_(depth), side_(1u << depth) {
   assert(depth >= 0 && depth <= 10);  // packed cell keys use 10 bits per axis
@@ -94,11 +136,8 @@ uint32_t WorldTree::cell_slot(const Coord& at) {
   uint32_t slot;
   if (free_cells_.empty()) {
     slot = uint32_t(cells_.size());
-    cells_.emplace_back();
+    cells_.emplace_back();  // room for a few ids in place (CellIds)
     if (busy_.size() * 64 < cells_.size()) busy_.push_back(0);
-    // Cells are reused (LIFO) by whatever moves in next: room for a few
-    // occupants up front, so a steady-state frame allocates nothing.
-    cells_.back().ids.reserve(kCellReserve);
   } else {
     slot = free_cells_.back();
     free_cells_.pop_back();
@@ -112,13 +151,13 @@ uint32_t WorldTree::cell_slot(const Coord& at) {
 
 void WorldTree::enter_cell(uint32_t slot, uint32_t id) {
   Cell& cell = cells_[slot];
-  insert_sorted(cell.ids, id);
+  cell.ids.insert_sorted(id);
   if (cell.ids.size() == 2) busy_[slot / 64] |= uint64_t(1) << (slot % 64);
 }
 
 bool WorldTree::leave_cell(uint32_t slot, uint32_t id) {
   Cell& cell = cells_[slot];
-  erase_sorted(cell.ids, id);
+  cell.ids.erase_sorted(id);
   if (cell.ids.size() < 2) busy_[slot / 64] &= ~(uint64_t(1) << (slot % 64));
   return cell.ids.empty();
 }
@@ -450,7 +489,8 @@ constexpr size_t kWordsPerPart = 8;
 template <class Keep, class Emit>
 void WorldTree::scan_cells(size_t begin, size_t end, Keep keep, Emit emit) const {
   // The busy cells of one bitmap word at a time, their id lists prefetched a
-  // few cells ahead: each list is its own heap block, a cache miss otherwise.
+  // few cells ahead: each cell (with its first ids) or longer list is a cache
+  // miss otherwise.
   constexpr int kAhead = 4;
   std::array<uint32_t, 64> slots;
   for (size_t word = begin; word < end; ++word) {

@@ -187,7 +187,8 @@ Seen seen(const WorldTree& tree, uint32_t seed) {
     const Eigen::Vector3d o(uniform(rng, -20, 20), uniform(rng, -20, 20), uniform(rng, -20, 20));
     const Eigen::Vector3d d = Eigen::Vector3d(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1)).normalized();
     WorldTree::RayWalk walk(tree, o, d, INFINITY);
-    while (walk.next()) s.walked.emplace_back(walk.cell(), walk.entry(), walk.ids());
+    while (walk.next()) s.walked.emplace_back(walk.cell(), walk.entry(),
+                                              std::vector<uint32_t>(walk.ids().begin(), walk.ids().end()));
   }
   return s;
 }
@@ -324,6 +325,38 @@ TEST(WorldTree, OutsideObjectsClampToBorderCells) {
   EXPECT_EQ(pairs, expected);
 }
 
+// A copy holds its own cells, whether their ids are kept in place (a few)
+// or on the heap (many): moving every object in the original, or in the
+// copy, leaves the other's pairs as they were.
+TEST(WorldTree, CopiesAreIndependent) {
+  WorldTree tree({{0, 0, 0}, {8, 8, 8}}, /*depth=*/3);
+  std::vector<Aabb> boxes;
+  for (int i = 0; i < 12; ++i) {  // 12 in cell (0, 0, 0): on the heap
+    const double x = 0.05 * i;
+    boxes.push_back({{x, 0.1, 0.1}, {x + 0.1, 0.2, 0.2}});
+  }
+  for (int i = 0; i < 3; ++i) boxes.push_back({{5.1, 5.1, 5.1 + 0.2 * i}, {5.2, 5.2, 5.2 + 0.2 * i}});  // in place
+  for (uint32_t i = 0; i < boxes.size(); ++i) tree.update(i, boxes[i]);
+  Pairs before;
+  tree.candidate_pairs(before);
+  ASSERT_EQ(before.size(), 12u * 11 / 2 + 3);
+  WorldTree copy = tree;
+  WorldTree assigned({{0, 0, 0}, {1, 1, 1}}, 0);
+  assigned = copy;
+  for (uint32_t i = 0; i < boxes.size(); ++i) tree.update(i, {boxes[i].min.array() + 3.0, boxes[i].max.array() + 3.0});
+  Pairs got;
+  copy.candidate_pairs(got);
+  EXPECT_EQ(got, before);
+  assigned.candidate_pairs(got);
+  EXPECT_EQ(got, before);
+  for (uint32_t i = 0; i < boxes.size(); ++i) copy.remove(i);
+  assigned.candidate_pairs(got);
+  EXPECT_EQ(got, before);
+  tree.candidate_pairs(got);
+  EXPECT_EQ(got.size(), before.size());  // moved together: the same pairs, other cells
+  EXPECT_EQ(copy.cells_in_use(), 0u);
+}
+
 TEST(WorldTree, HugeObjectGoesToOverflowInsteadOfThousandsOfCells) {
   WorldTree tree({{0, 0, 0}, {64, 64, 64}}, /*depth=*/6);
   tree.update(0, {{0, 0, 0}, {64, 1, 64}});  // a ground plane: 64*2*64 cells
@@ -458,7 +491,7 @@ TEST_P(WorldTreeQuery, RayWalkVisitsEveryOccupiedCellTheRayMeetsInOrder) {
       last = walk.entry();
       auto it = std::find_if(occupied.begin(), occupied.end(), [&](const auto& e) { return e.first == c; });
       ASSERT_NE(it, occupied.end()) << "walked an empty cell";
-      EXPECT_EQ(walk.ids(), it->second);
+      EXPECT_EQ(std::vector<uint32_t>(walk.ids().begin(), walk.ids().end()), it->second);
       // Met by the ray (up to the tube's width), and entered no earlier than walked.
       EXPECT_GE(ray_cell(s.grid, o, d, t_max, c, 1e-6), 0.0) << "walked a cell the ray does not meet, ray " << r;
       const double t = ray_cell(s.grid, o, d, t_max, c, 0);
@@ -498,7 +531,7 @@ TEST(WorldTree, RayOutsideTheWorldWalksTheBorderCells) {
   WorldTree::RayWalk again(tree, {30, -50, 30}, {0, 1, 0}, INFINITY);
   ASSERT_TRUE(again.next());
   EXPECT_NEAR(again.entry(), 53.0, 1e-6);
-  EXPECT_EQ(again.ids(), std::vector<uint32_t>{0});
+  EXPECT_EQ(std::vector<uint32_t>(again.ids().begin(), again.ids().end()), std::vector<uint32_t>{0});
   // Stopped short of it: nothing.
   WorldTree::RayWalk shorter(tree, {30, -50, 30}, {0, 1, 0}, 52.0);
   EXPECT_FALSE(shorter.next());
