@@ -51,10 +51,15 @@ void WorldTree::CellIds::erase_sorted(uint32_t id) {
   --size_;
 }
 
+// The union's members are made active by assigning to them by name.
 void WorldTree::CellIds::assign(const CellIds& o) {
   size_ = o.size_, cap_ = o.cap_;
-  if (on_heap()) heap_ = new uint32_t[cap_];
-  std::copy(o.begin(), o.end(), data());
+  if (on_heap()) {
+    heap_ = new uint32_t[cap_];
+    std::copy(o.begin(), o.end(), heap_);
+  } else {
+    for (uint32_t i = 0; i < kInline; ++i) in_[i] = o.in_[i];
+  }
 }
 
 void WorldTree::CellIds::take(CellIds& o) {
@@ -62,8 +67,9 @@ void WorldTree::CellIds::take(CellIds& o) {
   if (on_heap())
     heap_ = o.heap_;
   else
-    std::copy(o.in_, o.in_ + kInline, in_);
+    for (uint32_t i = 0; i < kInline; ++i) in_[i] = o.in_[i];
   o.size_ = 0, o.cap_ = kInline;
+  for (uint32_t i = 0; i < kInline; ++i) o.in_[i] = 0;
 }
 
 void WorldTree::CellIds::release() {
