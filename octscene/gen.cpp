@@ -58,7 +58,10 @@ Aabb spin_box(const Aabb& local, double scale) {
 bool share_ok(double share) { return share >= 0 && share <= 1; }
 
 // A loop around the world centre at 0.3 of its size, rising and falling by
-// 0.1, each key looking 0.6 rad ahead along the loop.
+// 0.1, each key looking 0.6 rad ahead along the loop. The keys go once around;
+// but 3 keys would be half a turn apart, and halfway between them the camera
+// would sit at the centre looking straight up (a scene parse_scene rejects),
+// so 3 keys are a third of a turn apart and the path stays open.
 std::vector<CameraKey> flythrough(int keys, int64_t frames, double world_size) {
   auto at = [world_size](double angle) {
     return Eigen::Vector3d{0.3 * world_size * std::cos(angle), 0.1 * world_size * std::sin(2 * angle),
@@ -66,7 +69,7 @@ std::vector<CameraKey> flythrough(int keys, int64_t frames, double world_size) {
   };
   std::vector<CameraKey> path;
   for (int k = 0; k < keys; ++k) {
-    const double angle = 2 * std::numbers::pi * k / (keys - 1);
+    const double angle = 2 * std::numbers::pi * k / (keys == 3 ? 3 : keys - 1);
     CameraKey key;
     key.frame = frames / (keys - 1) * k + frames % (keys - 1) * k / (keys - 1);  // floor(frames k / (keys-1)), no overflow
     key.position = at(angle);

@@ -184,6 +184,17 @@ TEST(GenMotion, CameraPathFliesThroughTheWorld) {
   }
 }
 
+// Every key count gives a path parse_scene accepts: the view never degenerates
+// between keys (3 keys once passed through the centre looking along up).
+TEST(GenMotion, EveryCameraKeyCountParses) {
+  const fs::path& dir = scratch_with_trees();
+  for (int keys = 2; keys <= 12; ++keys) {
+    Result<Scene> s = gen_scene(dir, "--camera-path " + std::to_string(keys), 5, 5, 80);
+    ASSERT_TRUE(s) << keys << " keys: " << s.error().message;
+    EXPECT_EQ(s->camera_path.size(), size_t(keys));
+  }
+}
+
 TEST(GenMotion, BadOptionsAreErrors) {
   const fs::path& dir = scratch_with_trees();
   for (const auto& [extra, expected] : std::vector<std::pair<std::string, std::string>>{
