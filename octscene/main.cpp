@@ -20,6 +20,7 @@
 #include "gen.h"
 #include "octbake/version.h"
 #include "plan.h"
+#include "world_depth.h"
 #include "run.h"
 #include "scene.h"
 #ifdef OCTSCENE_WITH_ANALYSIS
@@ -46,7 +47,8 @@ int default_threads() { return std::max(1u, std::thread::hardware_concurrency())
 
 // Options `run` and `plan` share: how the scene is run.
 struct SceneArgs {
-  std::string baked;  // overrides the scene's "baked" when set
+  std::string baked;     // overrides the scene's "baked" when set
+  int world_depth = -1;  // overrides the scene's world depth when >= 0
   RunOptions options;
 };
 
@@ -68,6 +70,8 @@ void add_scene_options(CLI::App* cmd, SceneArgs& a) {
   cmd->add_flag("--areas-every-frame", a.options.areas_every_frame,
                 "recompute pixel areas every frame, not only when an object changes leaf set");
   cmd->add_option("--baked", a.baked, "folder or pack of trees (default: the scene's \"baked\")");
+  cmd->add_option("--world-depth", a.world_depth, "WorldTree depth (default: the scene's world.depth)")
+      ->check(CLI::Range(0, 10));
   a.options.threads = default_threads();
   cmd->add_option("--threads", a.options.threads, "worker threads (results do not depend on it; default: all cores)")
       ->check(CLI::Range(1, 4096));
@@ -84,6 +88,7 @@ nlohmann::ordered_json options_json(const SceneArgs& a, const Scene& scene) {
   j["frames"] = a.options.frames >= 0 ? a.options.frames : scene.frames;
   j["areas_every_frame"] = a.options.areas_every_frame;
   j["threads"] = a.options.threads;
+  j["world_depth"] = scene.world_depth;
   return j;
 }
 
@@ -100,6 +105,7 @@ Result<Loaded> load(const std::string& scene_path, const SceneArgs& a) {
   if (!scene) return scene.error();
   Loaded l{std::move(scene).value(), std::nullopt, {}, {}};
   if (!a.baked.empty()) l.scene.baked = a.baked;
+  if (a.world_depth >= 0) l.scene.world_depth = a.world_depth;
 
   start_counting_allocations();
   Result<ModelLibrary> library = ModelLibrary::open(l.scene.baked);
@@ -290,6 +296,37 @@ void print_plan(const std::string& path, const SceneArgs& a, const Loaded& l, co
     std::printf("  (thesis LOD: its formula scales with the top depth, so a model needs its top depth)\n");
 }
 
+nlohmann::ordered_json world_depth_json(const WorldDepthCost& c) {
+  nlohmann::ordered_json j;
+  j["depth"] = c.depth;
+  j["memberships"] = c.memberships;
+  j["overflow"] = c.overflow;
+  j["cells"] = c.counted ? nlohmann::ordered_json(c.cells) : nlohmann::ordered_json();
+  j["scan_checks"] = c.counted ? nlohmann::ordered_json(c.scan_checks) : nlohmann::ordered_json();
+  j["overflow_checks"] = c.overflow_checks;
+  j["reinsertions"] = c.reinsertions;
+  j["cell_changes"] = c.cell_changes;
+  j["estimate_us"] = c.estimate_us;
+  return j;
+}
+
+void print_world_depths(int scene_depth, const WorldDepthPlan& plan) {
+  std::printf("  world depth %d, suggested %d; the WorldTree's share of a frame at each depth, estimated from frame 0:\n",
+              scene_depth, plan.suggested);
+  std::printf("  %5s %10s %12s %8s %12s %14s %12s\n", "depth", "cells", "memberships", "overflow", "scan checks",
+              "cell changes", "estimate us");
+  for (const WorldDepthCost& c : plan.depths) {
+    const std::string cells = c.counted ? std::to_string(c.cells) : "-";
+    const std::string scan = c.counted ? std::to_string(c.scan_checks) : "-";
+    std::printf("  %5d %10s %12llu %8llu %12s %14.1f %12.1f%s\n", c.depth, cells.c_str(),
+                static_cast<unsigned long long>(c.memberships), static_cast<unsigned long long>(c.overflow),
+                scan.c_str(), c.cell_changes, c.estimate_us,
+                c.depth == plan.suggested ? (c.depth == scene_depth ? "  <- scene, suggested" : "  <- suggested")
+                : c.depth == scene_depth ? "  <- scene"
+                                         : "");
+  }
+}
+
 int plan_command(const PlanArgs& args) {
   nlohmann::ordered_json scenes = nlohmann::ordered_json::array();
   for (const std::string& path : args.scene_paths) {
@@ -297,8 +334,10 @@ int plan_command(const PlanArgs& args) {
     if (!loaded) return fail(loaded.error().message);
     Result<ScenePlan> plan = plan_scene(loaded->scene, loaded->models, args.scene.options);
     if (!plan) return fail(path + ": " + plan.error().message);
+    const WorldDepthPlan depths = plan_world_depth(loaded->scene, loaded->models);
     if (!args.json) {
       print_plan(path, args.scene, *loaded, *plan);
+      print_world_depths(loaded->scene.world_depth, depths);
       continue;
     }
     nlohmann::ordered_json s;
@@ -309,6 +348,11 @@ int plan_command(const PlanArgs& args) {
     nlohmann::ordered_json models = nlohmann::ordered_json::array();
     for (const ModelPlan& m : plan->models) models.push_back(plan_json(m));
     s["models"] = models;
+    s["world_depth"] = loaded->scene.world_depth;
+    s["suggested_world_depth"] = depths.suggested;
+    nlohmann::ordered_json world_depths = nlohmann::ordered_json::array();
+    for (const WorldDepthCost& c : depths.depths) world_depths.push_back(world_depth_json(c));
+    s["world_depths"] = world_depths;
     scenes.push_back(s);
   }
   if (args.json) {
