@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <nlohmann/json.hpp>
@@ -198,7 +199,15 @@ SceneObject parse_object(const json& j, const std::string& path) {
   return o;
 }
 
-Scene parse(const json& root, const std::string& scene_dir) {
+// The objects of the scene's "objects" array, converted as the reader meets
+// them (a document of 100,000 objects took ~2 KB each).
+struct StreamedObjects {
+  std::vector<SceneObject> objects;
+  std::set<std::string> names;
+  std::optional<Invalid> first_error;  // reported after the other keys' errors, as before
+};
+
+Scene parse(const json& root, const std::string& scene_dir, StreamedObjects& streamed) {
   check_keys(root, "", {"format", "baked", "camera", "camera_path", "world", "timestep", "frames", "objects"});
   Scene s;
   std::string format = string(require(root, "", "format"), "format");
@@ -231,32 +240,45 @@ Scene parse(const json& root, const std::string& scene_dir) {
 
   const json& objects = require(root, "", "objects");
   if (!objects.is_array()) fail("objects", std::string("expected an array, got ") + type_name(objects));
-  std::set<std::string> names;
-  for (size_t i = 0; i < objects.size(); ++i) {
-    std::string path = index("objects", i);
-    s.objects.push_back(parse_object(objects[i], path));
-    if (!names.insert(s.objects.back().name).second)
-      fail(join(path, "name"), "duplicate name \"" + s.objects.back().name + "\"");
-  }
+  if (streamed.first_error) throw *streamed.first_error;
+  s.objects = std::move(streamed.objects);
   return s;
 }
 
-// A first pass over the text (SAX events, no document) that follows the JSON
-// path, so that the two errors nlohmann would not place can say where they
-// are: a duplicate key (nlohmann keeps the last; a scene must not say two
-// things) and a number beyond double (1e999). nlohmann's callback parser could
-// do this in one pass, but it scans the whole parent array after every object
-// (quadratic: 100,000 objects took 2.7 s), so the document is parsed after,
-// without a callback.
-class PathTracker : public nlohmann::json_sax<json> {
+// One element of "objects", as its last event arrives.
+void take_object(const json& element, size_t i, StreamedObjects& streamed) {
+  if (streamed.first_error) return;  // validation stops at the first problem
+  try {
+    const std::string path = index("objects", i);
+    streamed.objects.push_back(parse_object(element, path));
+    if (!streamed.names.insert(streamed.objects.back().name).second)
+      fail(join(path, "name"), "duplicate name \"" + streamed.objects.back().name + "\"");
+  } catch (const Invalid& e) {
+    streamed.first_error = e;
+  }
+}
+
+
+
+// One pass over the text (SAX events) that follows the JSON path, so that the
+// two errors nlohmann would not place can say where they are: a duplicate key
+// (nlohmann keeps the last; a scene must not say two things) and a number
+// beyond double (1e999). It builds the document, except that each element of
+// the top-level "objects" array is built alone, handed to take_object and
+// dropped: a 100,000-object scene's document took ~200 MB. (nlohmann's
+// callback parser could drop them too, but it scans the whole parent array
+// after every object: 100,000 objects took 2.7 s.)
+class SceneReader : public nlohmann::json_sax<json> {
  public:
-  bool null() override { return value(); }
-  bool boolean(bool) override { return value(); }
-  bool number_integer(number_integer_t) override { return value(); }
-  bool number_unsigned(number_unsigned_t) override { return value(); }
-  bool number_float(number_float_t, const string_t&) override { return value(); }
-  bool string(string_t&) override { return value(); }
-  bool binary(binary_t&) override { return value(); }
+  explicit SceneReader(StreamedObjects& streamed) : streamed_(streamed) {}
+
+  bool null() override { return value(json()); }
+  bool boolean(bool v) override { return value(json(v)); }
+  bool number_integer(number_integer_t v) override { return value(json(v)); }
+  bool number_unsigned(number_unsigned_t v) override { return value(json(v)); }
+  bool number_float(number_float_t v, const string_t&) override { return value(json(v)); }
+  bool string(string_t& v) override { return value(json(v)); }
+  bool binary(binary_t& v) override { return value(json::binary(std::move(v))); }
   bool start_object(std::size_t) override { return open(false); }
   bool start_array(std::size_t) override { return open(true); }
   bool end_object() override { return close(); }
@@ -283,6 +305,7 @@ class PathTracker : public nlohmann::json_sax<json> {
     return false;
   }
 
+  json root;
   std::string error;         // a duplicate key or a number beyond double, with its path
   std::string syntax_error;  // not JSON: the reason, at syntax_error_byte
   size_t syntax_error_byte = 0;
@@ -290,22 +313,48 @@ class PathTracker : public nlohmann::json_sax<json> {
  private:
   struct Frame {
     bool is_array;
-    size_t count;
+    size_t count;  // elements so far (arrays)
     std::string key;
     std::set<std::string> keys;
+    json* value;  // the object or array being built
   };
 
-  bool value() {
-    if (!stack_.empty() && stack_.back().is_array) ++stack_.back().count;
+  // Is the next value an element of the top-level "objects" array?
+  bool at_object_element() const {
+    return stack_.size() == 2 && !stack_[0].is_array && stack_[0].key == "objects" && stack_[1].is_array;
+  }
+  // Where a value that starts now goes: in its parent, or alone (an element
+  // of "objects").
+  json* place(json&& v) {
+    if (stack_.empty()) return &(root = std::move(v));
+    if (at_object_element()) return &(element_ = std::move(v));
+    Frame& top = stack_.back();
+    if (top.is_array) {
+      top.value->push_back(std::move(v));
+      return &top.value->back();
+    }
+    return &((*top.value)[top.key] = std::move(v));
+  }
+  // A value is complete: count it, and hand an element of "objects" over.
+  void done() {
+    if (stack_.empty()) return;
+    if (at_object_element()) take_object(element_, stack_.back().count, streamed_);
+    if (stack_.back().is_array) ++stack_.back().count;
+  }
+  bool value(json&& v) {
+    place(std::move(v));
+    done();
     return true;
   }
   bool open(bool is_array) {
-    stack_.push_back({is_array, 0, {}, {}});
+    json* v = place(is_array ? json::array() : json::object());
+    stack_.push_back({is_array, 0, {}, {}, v});
     return true;
   }
   bool close() {
     stack_.pop_back();
-    return value();
+    done();
+    return true;
   }
   std::string path() const {
     std::string p;
@@ -313,6 +362,8 @@ class PathTracker : public nlohmann::json_sax<json> {
     return p;
   }
 
+  StreamedObjects& streamed_;
+  json element_;  // the element of "objects" being read
   std::vector<Frame> stack_;
 };
 
@@ -332,20 +383,15 @@ std::string line_column(const std::string& text, size_t byte) {
 }  // namespace
 
 Result<Scene> parse_scene(const std::string& json_text, const std::string& scene_dir) {
-  PathTracker tracker;
-  if (!json::sax_parse(json_text, &tracker)) {
-    if (!tracker.error.empty()) return Error{ErrorCode::invalid_argument, tracker.error};
+  StreamedObjects streamed;
+  SceneReader reader(streamed);
+  if (!json::sax_parse(json_text, &reader)) {
+    if (!reader.error.empty()) return Error{ErrorCode::invalid_argument, reader.error};
     return Error{ErrorCode::invalid_argument,
-                 "invalid JSON at " + line_column(json_text, tracker.syntax_error_byte) + ": " + tracker.syntax_error};
-  }
-  json root;
-  try {
-    root = json::parse(json_text);  // the first pass accepted it
-  } catch (const json::exception& e) {
-    return Error{ErrorCode::invalid_argument, e.what()};  // not expected
+                 "invalid JSON at " + line_column(json_text, reader.syntax_error_byte) + ": " + reader.syntax_error};
   }
   try {
-    return parse(root, scene_dir);
+    return parse(reader.root, scene_dir, streamed);
   } catch (const Invalid& e) {
     return Error{ErrorCode::invalid_argument, e.message};
   } catch (const json::exception& e) {
@@ -356,10 +402,12 @@ Result<Scene> parse_scene(const std::string& json_text, const std::string& scene
 Result<Scene> load_scene(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return Error{ErrorCode::not_found, path + ": cannot open"};
-  std::stringstream text;
-  text << in.rdbuf();
+  // Read straight into one string (a stringstream held the text twice).
+  std::string text;
+  char buffer[1 << 16];
+  while (in.read(buffer, sizeof buffer) || in.gcount() > 0) text.append(buffer, size_t(in.gcount()));
   if (in.bad()) return Error{ErrorCode::io_error, path + ": read failed"};
-  Result<Scene> s = parse_scene(text.str(), std::filesystem::path(path).parent_path().string());
+  Result<Scene> s = parse_scene(text, std::filesystem::path(path).parent_path().string());
   if (!s) return Error{s.error().code, path + ": " + s.error().message};
   return s;
 }

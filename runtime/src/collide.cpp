@@ -358,11 +358,10 @@ using v8d_mem = double __attribute__((vector_size(64), aligned(8), may_alias));
 // four aligned stores (one load of a lane chunk then finds one store).
 [[gnu::always_inline]] inline void store_groups(double* out, const v4d& g0, const v4d& g1, const v4d& g2,
                                                 const v4d& g3, const v4d& g4) {
-  using v4l = int64_t __attribute__((vector_size(32)));
-  store4(out, __builtin_shuffle(g0, g1, v4l{0, 1, 2, 4}));
-  store4(out + 4, __builtin_shuffle(g1, g2, v4l{1, 2, 4, 5}));
-  store4(out + 8, __builtin_shuffle(g2, g3, v4l{2, 4, 5, 6}));
-  store4(out + 12, __builtin_shuffle(g4, v4d{}, v4l{0, 1, 2, 4}));
+  store4(out, __builtin_shufflevector(g0, g1, 0, 1, 2, 4));
+  store4(out + 4, __builtin_shufflevector(g1, g2, 1, 2, 4, 5));
+  store4(out + 8, __builtin_shufflevector(g2, g3, 2, 4, 5, 6));
+  store4(out + 12, __builtin_shufflevector(g4, v4d{}, 0, 1, 2, 4));
 }
 
 // out = a + b (times scale if kScale), 16 lanes: a child's projections, its
@@ -465,11 +464,10 @@ class PairFrame {
                  ar[2] * h0 + ar[0] * h2, ar[1] * h0 + ar[0] * h1);
     store_groups(t_.padding_a, pads, ((ar[0] + ar[1]) + ar[2]) * pad, (ar[2] + ar[1]) * pad, (ar[2] + ar[0]) * pad,
                  (ar[1] + ar[0]) * pad);
-    using v4l = int64_t __attribute__((vector_size(32)));
     const v4d gj1{g1, g0, g0, 0}, gj2{g2, g2, g1, 0};  // g_j1 / g_j2 by lane j, each in the order of g
     v4d cross_b[3], cross_pad_b[3];
     for (int i = 0; i < 3; ++i) {
-      const v4d x = __builtin_shuffle(ar[i], v4l{2, 2, 1, 3}), y = __builtin_shuffle(ar[i], v4l{1, 0, 0, 3});
+      const v4d x = __builtin_shufflevector(ar[i], ar[i], 2, 2, 1, 3), y = __builtin_shufflevector(ar[i], ar[i], 1, 0, 0, 3);
       cross_b[i] = gj1 * x + gj2 * y;
       cross_pad_b[i] = (x + y) * pad;
     }
@@ -609,18 +607,17 @@ class PairFrame {
   // (flag `bit` of filled_offsets_).
   const double (*centres(double (*centre)[8], const Lanes* offset, uint32_t bit) const)[8] {
     if (!(filled_offsets_ & bit)) {
-      using v4l = int64_t __attribute__((vector_size(32)));
       for (int h = 0; h < 8; h += 4) {
         v4d r0, r1, r2, r3;
         load4(r0, offset[h]);
         load4(r1, offset[h + 1]);
         load4(r2, offset[h + 2]);
         load4(r3, offset[h + 3]);
-        const v4d t0 = __builtin_shuffle(r0, r1, v4l{0, 4, 2, 6}), t1 = __builtin_shuffle(r0, r1, v4l{1, 5, 3, 7});
-        const v4d t2 = __builtin_shuffle(r2, r3, v4l{0, 4, 2, 6}), t3 = __builtin_shuffle(r2, r3, v4l{1, 5, 3, 7});
-        store4(centre[0] + h, __builtin_shuffle(t0, t2, v4l{0, 1, 4, 5}));
-        store4(centre[1] + h, __builtin_shuffle(t1, t3, v4l{0, 1, 4, 5}));
-        store4(centre[2] + h, __builtin_shuffle(t0, t2, v4l{2, 3, 6, 7}));
+        const v4d t0 = __builtin_shufflevector(r0, r1, 0, 4, 2, 6), t1 = __builtin_shufflevector(r0, r1, 1, 5, 3, 7);
+        const v4d t2 = __builtin_shufflevector(r2, r3, 0, 4, 2, 6), t3 = __builtin_shufflevector(r2, r3, 1, 5, 3, 7);
+        store4(centre[0] + h, __builtin_shufflevector(t0, t2, 0, 1, 4, 5));
+        store4(centre[1] + h, __builtin_shufflevector(t1, t3, 0, 1, 4, 5));
+        store4(centre[2] + h, __builtin_shufflevector(t0, t2, 2, 3, 6, 7));
       }
       filled_offsets_ |= bit;
     }

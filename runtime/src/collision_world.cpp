@@ -10,7 +10,6 @@
 #include <condition_variable>
 #include <limits>
 #include <mutex>
-#include <ranges>
 #include <string>
 #include <thread>
 
@@ -1288,6 +1287,22 @@ void CollisionWorld::query_candidates(const Aabb& box) {
   if (query_ids_.size() > n) std::sort(query_ids_.begin(), query_ids_.end());
 }
 
+namespace {
+// Slots 0..n-1 as keep_overlapping's ids (std::views::iota does not compile
+// with clang 14 and libstdc++ 12, the fuzz build's pair).
+struct AllSlots {
+  struct Iterator {
+    uint32_t i;
+    uint32_t operator*() const { return i; }
+    Iterator& operator++() { return ++i, *this; }
+    bool operator!=(const Iterator& o) const { return i != o.i; }
+  };
+  uint32_t n;
+  Iterator begin() const { return {0}; }
+  Iterator end() const { return {n}; }
+};
+}  // namespace
+
 template <class Ids, class Leaves>
 void CollisionWorld::keep_overlapping(const Ids& ids, const Aabb& bounds, Leaves leaves, std::vector<ObjectHandle>& out) {
   for (uint32_t i : ids) {
@@ -1317,7 +1332,7 @@ Status CollisionWorld::overlap_sphere(const Eigen::Vector3d& center, double radi
 Status CollisionWorld::overlap_box_scan(const Aabb& box, std::vector<ObjectHandle>& out) {
   out.clear();
   if (bad_box(box)) return bad("overlap_box: non-finite box or min > max");
-  keep_overlapping(std::views::iota(uint32_t{0}, uint32_t(slots_.size())), box,
+  keep_overlapping(AllSlots{uint32_t(slots_.size())}, box,
                    [&](uint32_t i) { return box_leaves(i, box); }, out);
   return std::monostate{};
 }
@@ -1326,7 +1341,7 @@ Status CollisionWorld::overlap_sphere_scan(const Eigen::Vector3d& center, double
   out.clear();
   if (bad_sphere(center, radius)) return bad("overlap_sphere: non-finite center or radius, or radius < 0");
   const Aabb bounds{center.array() - radius, center.array() + radius};
-  keep_overlapping(std::views::iota(uint32_t{0}, uint32_t(slots_.size())), bounds,
+  keep_overlapping(AllSlots{uint32_t(slots_.size())}, bounds,
                    [&](uint32_t i) { return sphere_leaves(i, center, radius); }, out);
   return std::monostate{};
 }

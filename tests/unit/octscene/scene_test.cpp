@@ -224,6 +224,45 @@ TEST(Scene, ErrorPathsFarIntoALargeScene) {
   EXPECT_EQ(error_of(text.replace(v, 7, "[0,0,-1e999]")), "objects[4321].velocity[2]: not a finite number");
 }
 
+// The objects are converted as the reader meets them (no document of them is
+// kept), yet the errors are those of a whole-document check: the other keys'
+// first, wherever they sit in the text, then the first bad object; elements
+// that are not objects, and "objects" keys deeper down, are no exception.
+TEST(Scene, ObjectsReadAsTheyComeReportTheSameErrors) {
+  json j = good_scene();
+  j["objects"][1]["scale"] = -1;
+  EXPECT_EQ(error_of(j), "objects[1].scale: must be > 0");
+  std::string text = j.dump();  // keys sorted: "timestep" comes after "objects"
+  ASSERT_LT(text.find("\"objects\""), text.find("\"timestep\""));
+  j["timestep"] = 0;
+  EXPECT_EQ(error_of(j), "timestep: must be > 0");
+  j = good_scene();
+  j["objects"].push_back(5);
+  j["objects"].push_back(json::array({1, 2}));
+  EXPECT_EQ(error_of(j), "objects[2]: expected an object, got number");
+  j = good_scene();
+  j["objects"].push_back(j["objects"][0]);
+  EXPECT_EQ(error_of(j), "objects[2].name: duplicate name \"tree_0\"");
+  j = good_scene();
+  j["objects"] = json::array({json::object({{"objects", json::array({1})}})});
+  EXPECT_EQ(error_of(j), "objects[0].objects: unknown key");
+  j["objects"] = json::object({{"a", 1}});
+  EXPECT_EQ(error_of(j), "objects: expected an array, got object");
+  j.erase("objects");
+  EXPECT_EQ(error_of(j), "objects: missing required key");
+  // And what parses is every object, in order, with its values.
+  j = good_scene();
+  for (int i = 0; i < 300; ++i)
+    j["objects"].push_back({{"name", "o" + std::to_string(i)}, {"model", "m"}, {"position", {i, -i, 0.5 * i}}});
+  Result<Scene> s = parse_scene(j.dump(), "");
+  ASSERT_TRUE(s) << s.error().message;
+  ASSERT_EQ(s->objects.size(), 302u);
+  for (int i = 0; i < 300; ++i) {
+    EXPECT_EQ(s->objects[size_t(i) + 2].name, "o" + std::to_string(i));
+    EXPECT_EQ(s->objects[size_t(i) + 2].pose.position, Eigen::Vector3d(i, -i, 0.5 * i));
+  }
+}
+
 TEST(Scene, InvalidJsonNamesLineAndColumn) {
   std::string text = "{\n  \"format\": \"octbake-scene/1\",\n  \"frames\": 10,,\n}";
   std::string e = error_of(text);

@@ -127,7 +127,7 @@ TEST(WorldDepth, ExpectedChangesAreTheAverageOverStartingPoints) {
       const Eigen::Vector3d lo = random_point(rng, 10, 40);
       const Aabb a{lo, lo + m.size}, b{lo + m.shift, lo + m.shift + m.size + m.grow};
       const std::vector<Aabb> now{a}, next{b};
-      const WorldDepthCost& c = plan_world_depth(world, now, next).depths[6];
+      const WorldDepthCost c = plan_world_depth(world, now, next).depths[6];
       expected_changes += c.cell_changes;
       expected_reinsertions += c.reinsertions;
       const WorldTree::CellRange ra = grid.cell_range(a), rb = grid.cell_range(b);
