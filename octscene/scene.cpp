@@ -7,7 +7,6 @@
 #include <initializer_list>
 #include <optional>
 #include <set>
-#include <sstream>
 #include <nlohmann/json.hpp>
 
 namespace octbake::scene {
@@ -199,8 +198,8 @@ SceneObject parse_object(const json& j, const std::string& path) {
   return o;
 }
 
-// The objects of the scene's "objects" array, converted as the reader meets
-// them (a document of 100,000 objects took ~2 KB each).
+// The scene's "objects", converted as the reader meets them (a document of
+// them all took ~2 KB an object).
 struct StreamedObjects {
   std::vector<SceneObject> objects;
   std::set<std::string> names;
@@ -257,8 +256,6 @@ void take_object(const json& element, size_t i, StreamedObjects& streamed) {
     streamed.first_error = e;
   }
 }
-
-
 
 // One pass over the text (SAX events) that follows the JSON path, so that the
 // two errors nlohmann would not place can say where they are: a duplicate key

@@ -13,15 +13,10 @@ namespace octbake::scene {
 
 namespace {
 
-struct Span {
-  WorldTree::CellRange range;
-  uint64_t cells = 0;
-};
-
-Span span_of(const WorldTree& grid, const Aabb& box) {
-  Span s{grid.cell_range(box), 1};
-  for (int k = 0; k < 3; ++k) s.cells *= uint64_t(s.range.hi[k] - s.range.lo[k]) + 1;
-  return s;
+uint64_t cells_in(const WorldTree::CellRange& r) {
+  uint64_t cells = 1;
+  for (int k = 0; k < 3; ++k) cells *= uint64_t(r.hi[k] - r.lo[k]) + 1;
+  return cells;
 }
 
 // Sorts `keys` (packed cells, one per membership) and adds each cell's
@@ -47,6 +42,7 @@ WorldDepthPlan plan_world_depth(const Aabb& world, std::span<const Aabb> now, st
   assert(now.size() == next.size());
   const uint64_t n = now.size();
   WorldDepthPlan plan;
+  std::vector<WorldTree::CellRange> ranges(n);
   std::vector<uint64_t> keys;
   for (int depth = 0; depth <= 10; ++depth) {
     const WorldTree grid(world, depth);
@@ -55,32 +51,32 @@ WorldDepthPlan plan_world_depth(const Aabb& world, std::span<const Aabb> now, st
     WorldDepthCost c;
     c.depth = depth;
     for (uint64_t i = 0; i < n; ++i) {
-      const Span s = span_of(grid, now[i]);
-      if (s.range.overflow) {
+      const WorldTree::CellRange& r = ranges[i] = grid.cell_range(now[i]);
+      if (r.overflow) {
         ++c.overflow;
         continue;
       }
-      c.memberships += s.cells;
+      const uint64_t cells = cells_in(r);
+      c.memberships += cells;
       // Each face crosses, on average, as many cell boundaries as it moves
       // cell widths; each crossing enters or leaves one slab of the range.
       double crossings = 0, changes = 0;
       for (int k = 0; k < 3; ++k) {
-        const double width = double(s.range.hi[k] - s.range.lo[k]) + 1;
+        const double width = double(r.hi[k] - r.lo[k]) + 1;
         double moved =
             (std::abs(next[i].min[k] - now[i].min[k]) + std::abs(next[i].max[k] - now[i].max[k])) * cells_per_unit[k];
         if (!(moved < 2 * width)) moved = 2 * width;  // all of it changes (also inf or NaN at 1e308)
         crossings += moved;
-        changes += moved * (double(s.cells) / width);
+        changes += moved * (double(cells) / width);
       }
       c.reinsertions += std::min(1.0, crossings);
-      c.cell_changes += std::min(changes, 2.0 * double(s.cells));
+      c.cell_changes += std::min(changes, 2.0 * double(cells));
     }
     c.counted = c.memberships <= counted_memberships;
     if (c.counted) {
       keys.clear();
       keys.reserve(c.memberships);
-      for (uint64_t i = 0; i < n; ++i) {
-        const WorldTree::CellRange r = grid.cell_range(now[i]);
+      for (const WorldTree::CellRange& r : ranges) {
         if (r.overflow) continue;
         for (uint64_t z = r.lo[2]; z <= r.hi[2]; ++z)
           for (uint64_t y = r.lo[1]; y <= r.hi[1]; ++y)
