@@ -32,6 +32,16 @@ constexpr double kRelPad = 1e-9;
 // Added to |R| (Gottschalk's guard): near-parallel edge pairs give near-zero
 // cross axes on which both sides of the SAT inequality are pure rounding.
 constexpr double kAxisPad = 1e-9;
+// The padding never falls below kMinPad, so that every radius is at least
+// ~2^-930 (the cross axes' padding is kAxisPad times it). Why: the AVX-512
+// build fuses p + o 2^-d into one rounding, the others round o 2^-d first.
+// The product is exact unless it is subnormal, and then the two sums can
+// differ only where |p| < 2^-967 (a rounding boundary within 2^-1075 of p +
+// o 2^-d needs p's spacing below 2^-1020): such a value is never above a
+// radius, and its square (the nearest-first key) is 0 either way. So every
+// build gives the same hits, counts and leaf pairs (tested down to offsets
+// of 1e-320).
+constexpr double kMinPad = 0x1p-900;
 
 using Coord = std::array<uint16_t, 3>;
 
@@ -106,7 +116,7 @@ struct Relative {
     const Aabb& bb = b.tree->bounds();
     const double mag_a = max_abs_coordinate(ba);
     const double mag_b = max_abs_coordinate(bb);
-    pad = kRelPad * (mag_a + s * mag_b + t.cwiseAbs().maxCoeff());
+    pad = std::max(kRelPad * (mag_a + s * mag_b + t.cwiseAbs().maxCoeff()), kMinPad);
   }
 };
 
@@ -145,14 +155,33 @@ bool occupied(const ObjectTree& tree, int depth, const BoxCoord& c) {
 // that pass the first).
 //
 // Three builds: plain C++, AVX2 and AVX-512. Each lane is at most one
-// multiplication, one addition, one absolute value and one ordered
-// comparison (no fused multiply-add), so all three give identical bits.
+// multiplication by a power of two, one addition, one absolute value and one
+// ordered comparison; the AVX-512 build fuses the first two (one rounding:
+// exact unless the product is subnormal, which kMinPad makes harmless), so
+// all three give the same results.
 //
 // Each build is a class whose kernel is inlined into the whole pair test,
 // which is compiled once per build and chosen once per pair (run_pair): no
 // call through a pointer in the descent's inner loop.
 constexpr int kLanes = 16;
 using Lanes = double[kLanes];
+
+// Written per chunk of 4 lanes with GCC/Clang vector types, loaded and stored
+// through pointers only: the compiler then emits one vector operation per
+// chunk for whatever ISA the caller is built for (left to the
+// auto-vectoriser, these loops came out as shuffles).
+using v4d = double __attribute__((vector_size(32)));
+using v4d_mem = double __attribute__((vector_size(32), aligned(8), may_alias));
+[[gnu::always_inline]] inline void load4(v4d& v, const double* p) { v = *reinterpret_cast<const v4d_mem*>(p); }
+[[gnu::always_inline]] inline void store4(double* p, const v4d& v) { *reinterpret_cast<v4d_mem*>(p) = v; }
+// Lanes the descent writes and the kernels read back soon after (a child's
+// projections, a level's radii) go in 8-lane chunks: one zmm store in the
+// AVX-512 build, whose kernel loads 8 lanes at once (a load spanning two
+// narrower stores is not forwarded from them: it waits for them to retire).
+using v8d = double __attribute__((vector_size(64)));
+using v8d_mem = double __attribute__((vector_size(64), aligned(8), may_alias));
+[[gnu::always_inline]] inline void load8(v8d& v, const double* p) { v = *reinterpret_cast<const v8d_mem*>(p); }
+[[gnu::always_inline]] inline void store8(double* p, const v8d& v) { *reinterpret_cast<v8d_mem*>(p) = v; }
 
 struct Portable {
   template <bool kScale>
@@ -179,6 +208,30 @@ struct Portable {
     return !separated;
   }
 
+  // out = a + b * scale, 16 lanes: a child's projections from its parent's
+  // and its offset, as children_overlap computes them.
+  [[gnu::always_inline]] static void add_scaled(double* out, const double* a, const double* b, double scale) {
+    for (int k = 0; k < kLanes; k += 8) {
+      v8d x, y;
+      load8(x, a + k);
+      load8(y, b + k);
+      store8(out + k, x + y * scale);
+    }
+  }
+
+  // The nearest-first keys of the 8 children: key[j] = the squared length of
+  // lanes 0..2 of child j's projections, p[k] + centre[k][j] * scale.
+  [[gnu::always_inline]] static void keys(double* key, const double* p, const double (*centre)[8], double scale) {
+    for (int h = 0; h < 8; h += 4) {
+      v4d x, y, z;
+      load4(x, centre[0] + h);
+      load4(y, centre[1] + h);
+      load4(z, centre[2] + h);
+      x = p[0] + x * scale, y = p[1] + y * scale, z = p[2] + z * scale;
+      store4(key + h, (x * x + y * y) + z * z);
+    }
+  }
+
   // Nearest first: order[0..) = the octants of `hits`, by key[octant]
   // ascending, ties in octant order (a stable sort). Returns how many.
   [[gnu::always_inline]] static int nearest_order(const double* key, uint32_t hits, uint8_t* order) {
@@ -201,6 +254,13 @@ struct Portable {
 #define OCTBAKE_X86_KERNELS 1
 
 struct Avx2 {
+  [[gnu::always_inline]] static void add_scaled(double* out, const double* a, const double* b, double scale) {
+    Portable::add_scaled(out, a, b, scale);
+  }
+  [[gnu::always_inline]] static void keys(double* key, const double* p, const double (*centre)[8], double scale) {
+    Portable::keys(key, p, centre, scale);
+  }
+
   template <bool kScale>
   [[gnu::target("avx2")]] static uint32_t children_overlap(const double* parent, const double* radius,
                                                          const Lanes* offset, double scale, const uint8_t* octant,
@@ -258,6 +318,22 @@ struct Avx2 {
 };
 
 struct Avx512 {
+  // As Portable's, the products fused with the sums: the same results (see
+  // kMinPad).
+  [[gnu::target("avx512f")]] static void add_scaled(double* out, const double* a, const double* b, double scale) {
+    const __m512d s = _mm512_set1_pd(scale);
+    for (int k = 0; k < kLanes; k += 8)
+      _mm512_storeu_pd(out + k, _mm512_fmadd_pd(_mm512_loadu_pd(b + k), s, _mm512_loadu_pd(a + k)));
+  }
+  [[gnu::target("avx512f")]] static void keys(double* key, const double* p, const double (*centre)[8],
+                                              double scale) {
+    const __m512d s = _mm512_set1_pd(scale);
+    const __m512d x = _mm512_fmadd_pd(_mm512_loadu_pd(centre[0]), s, _mm512_set1_pd(p[0]));
+    const __m512d y = _mm512_fmadd_pd(_mm512_loadu_pd(centre[1]), s, _mm512_set1_pd(p[1]));
+    const __m512d z = _mm512_fmadd_pd(_mm512_loadu_pd(centre[2]), s, _mm512_set1_pd(p[2]));
+    _mm512_storeu_pd(key, _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(x, x), _mm512_mul_pd(y, y)), _mm512_mul_pd(z, z)));
+  }
+
   template <bool kScale>
   [[gnu::target("avx512f")]] static uint32_t children_overlap(const double* parent, const double* radius,
                                                             const Lanes* offset, double scale,
@@ -269,8 +345,8 @@ struct Avx512 {
     for (int c = 0; c < n; ++c) {
       const double* o = offset[octant[c]];
       const __m512d o0 = _mm512_loadu_pd(o), o1 = _mm512_loadu_pd(o + 8);
-      const __m512d q0 = _mm512_add_pd(p0, kScale ? _mm512_mul_pd(o0, s) : o0);
-      const __m512d q1 = _mm512_add_pd(p1, kScale ? _mm512_mul_pd(o1, s) : o1);
+      const __m512d q0 = kScale ? _mm512_fmadd_pd(o0, s, p0) : _mm512_add_pd(p0, o0);
+      const __m512d q1 = kScale ? _mm512_fmadd_pd(o1, s, p1) : _mm512_add_pd(p1, o1);
       const __mmask8 separated = __mmask8(_mm512_cmp_pd_mask(_mm512_abs_pd(q0), r0, _CMP_GT_OQ) |
                                           _mm512_cmp_pd_mask(_mm512_abs_pd(q1), r1, _CMP_GT_OQ));
       overlapping |= uint32_t(separated == 0) << octant[c];
@@ -303,27 +379,10 @@ struct LaneTables {
   alignas(64) Lanes offset_a[8], offset_b[8];
   // Their lanes 0..2 by octant (centre_a[k][j] = offset_a[j][k]): collide only,
   // filled when first needed to rank children.
-  alignas(32) double centre_a[3][8], centre_b[3][8];
+  alignas(64) double centre_a[3][8], centre_b[3][8];
   // Radius of a padded box on every axis at depth d: base * 2^-d + padding.
   alignas(64) Lanes base_a, base_b, padding_a, padding_b;
 };
-
-// Written per chunk of 4 lanes with GCC/Clang vector types, loaded and stored
-// through pointers only: the compiler then emits one vector operation per
-// chunk for whatever ISA the caller is built for (left to the
-// auto-vectoriser, these loops came out as shuffles).
-using v4d = double __attribute__((vector_size(32)));
-using v4d_mem = double __attribute__((vector_size(32), aligned(8), may_alias));
-[[gnu::always_inline]] inline void load4(v4d& v, const double* p) { v = *reinterpret_cast<const v4d_mem*>(p); }
-[[gnu::always_inline]] inline void store4(double* p, const v4d& v) { *reinterpret_cast<v4d_mem*>(p) = v; }
-// Lanes the descent writes and the kernels read back soon after (a child's
-// projections, a level's radii) go in 8-lane chunks: one zmm store in the
-// AVX-512 build, whose kernel loads 8 lanes at once (a load spanning two
-// narrower stores is not forwarded from them: it waits for them to retire).
-using v8d = double __attribute__((vector_size(64)));
-using v8d_mem = double __attribute__((vector_size(64), aligned(8), may_alias));
-[[gnu::always_inline]] inline void load8(v8d& v, const double* p) { v = *reinterpret_cast<const v8d_mem*>(p); }
-[[gnu::always_inline]] inline void store8(double* p, const v8d& v) { *reinterpret_cast<v8d_mem*>(p) = v; }
 
 // A child at depth 1 sits at the root's centre +- q on each axis m of its
 // tree; weights[m] give the effect on the projections (times sign). Octants
@@ -604,21 +663,24 @@ class PairFrame {
   }
 
   // centre[k][j] = offset[j][k], k < 3 (two 4x4 transpositions), filled once
-  // (flag `bit` of filled_offsets_).
+  // (flag `bit` of filled_offsets_). Rows stored 8 lanes at once: the AVX-512
+  // build reads them so, and a load spanning two stores waits for them.
   const double (*centres(double (*centre)[8], const Lanes* offset, uint32_t bit) const)[8] {
     if (!(filled_offsets_ & bit)) {
-      for (int h = 0; h < 8; h += 4) {
+      v4d row[2][3];  // [octants h..h+3][k]
+      for (int h = 0; h < 2; ++h) {
         v4d r0, r1, r2, r3;
-        load4(r0, offset[h]);
-        load4(r1, offset[h + 1]);
-        load4(r2, offset[h + 2]);
-        load4(r3, offset[h + 3]);
+        load4(r0, offset[4 * h]);
+        load4(r1, offset[4 * h + 1]);
+        load4(r2, offset[4 * h + 2]);
+        load4(r3, offset[4 * h + 3]);
         const v4d t0 = __builtin_shufflevector(r0, r1, 0, 4, 2, 6), t1 = __builtin_shufflevector(r0, r1, 1, 5, 3, 7);
         const v4d t2 = __builtin_shufflevector(r2, r3, 0, 4, 2, 6), t3 = __builtin_shufflevector(r2, r3, 1, 5, 3, 7);
-        store4(centre[0] + h, __builtin_shufflevector(t0, t2, 0, 1, 4, 5));
-        store4(centre[1] + h, __builtin_shufflevector(t1, t3, 0, 1, 4, 5));
-        store4(centre[2] + h, __builtin_shufflevector(t0, t2, 2, 3, 6, 7));
+        row[h][0] = __builtin_shufflevector(t0, t2, 0, 1, 4, 5);
+        row[h][1] = __builtin_shufflevector(t1, t3, 0, 1, 4, 5);
+        row[h][2] = __builtin_shufflevector(t0, t2, 2, 3, 6, 7);
       }
+      for (int k = 0; k < 3; ++k) store8(centre[k], __builtin_shufflevector(row[0][k], row[1][k], 0, 1, 2, 3, 4, 5, 6, 7));
       filled_offsets_ |= bit;
     }
     return centre;
@@ -797,15 +859,7 @@ template <class K, class OnLeaf>
       alignas(32) double key[8];
       const bool ranked = (hits & (hits - 1)) != 0;
       if (ranked) {
-        const double(*centre)[8] = frame.centres(lv);
-        for (int h = 0; h < 8; h += 4) {
-          v4d x, y, z;
-          load4(x, centre[0] + h);
-          load4(y, centre[1] + h);
-          load4(z, centre[2] + h);
-          x = o.p[0] + x * lv.scale, y = o.p[1] + y * lv.scale, z = o.p[2] + z * lv.scale;
-          store4(key + h, (x * x + y * y) + z * z);
-        }
+        K::keys(key, o.p, frame.centres(lv), lv.scale);
       }
       const auto report = [&](int j) {
         const Packed grown = child_of(o.coord[side], uint8_t(j));
@@ -846,7 +900,7 @@ template <class K, class OnLeaf>
     ++l;
     const uint8_t j = parent.order[parent.next++];
     const int split = plv.split_a ? 0 : 1;
-    add_lanes<true>(child.p, parent.p, plv.offset[j], plv.scale);
+    K::add_scaled(child.p, parent.p, plv.offset[j], plv.scale);
     child.index[0] = parent.index[0], child.index[1] = parent.index[1];
     child.coord[0] = parent.coord[0], child.coord[1] = parent.coord[1];
     child.index[split] = parent.first + uint32_t(std::popcount(unsigned(parent.mask & ((1u << j) - 1))));

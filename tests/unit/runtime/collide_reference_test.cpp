@@ -123,6 +123,51 @@ TEST(CollideReference, EveryKernelBuildGivesTheSameBits) {
   EXPECT_LT(hits, kRuns * 7 / 10);
 }
 
+// Near-axis-aligned rotations (angles 1e-320..1e-270 rad) and B up to 1e-300
+// times A's size give child offsets near and below the subnormal range, where
+// a product with 2^-d may round: every build still gives the same bits (the
+// AVX-512 build fuses those products with the sums), and no pair the scalar
+// reference finds touching is missed.
+TEST(CollideReference, EveryKernelBuildAgreesOnSubnormalOffsets) {
+  std::vector<BoxKernel> kernels;
+  for (const BoxKernel k : {BoxKernel::portable, BoxKernel::avx2, BoxKernel::avx512})
+    if (use_box_kernel(k)) kernels.push_back(k);
+  ASSERT_TRUE(use_box_kernel(BoxKernel::best));
+  std::mt19937 rng(33);
+  const auto tiny_rotation = [&] {
+    const double angle = std::pow(10.0, -270 - 50 * uniform01(rng));
+    return Eigen::Quaterniond(Eigen::AngleAxisd(angle, random_rotation(rng) * Eigen::Vector3d::UnitX()));
+  };
+  int hits = 0;
+  for (int run = 0; run < kRuns; ++run) {
+    const int depth_a = 1 + int(rng() % 4), depth_b = 1 + int(rng() % 4);
+    const ObjectTree ta = random_tree(rng, depth_a), tb = random_tree(rng, depth_b);
+    Pose pa, pb;
+    pa.rotation = tiny_rotation();
+    pb.rotation = tiny_rotation();
+    pb.scale = run % 2 == 0 ? std::pow(10.0, -300 * uniform01(rng)) : 0.5 + uniform01(rng);
+    pb.position = Eigen::Vector3d(uniform01(rng), uniform01(rng), uniform01(rng)) - Eigen::Vector3d::Constant(0.5);
+    const PlacedTree a{&ta, pa, depth_a}, b{&tb, pb, depth_b};
+    std::vector<PairTest> results;
+    for (const BoxKernel k : kernels) {
+      ASSERT_TRUE(use_box_kernel(k));
+      results.push_back(collide(a, b));
+    }
+    ASSERT_TRUE(use_box_kernel(BoxKernel::best));
+    for (size_t k = 1; k < results.size(); ++k) {
+      ASSERT_EQ(results[k].hit, results[0].hit) << "run " << run;
+      ASSERT_EQ(results[k].box_tests, results[0].box_tests) << "run " << run;
+      ASSERT_EQ(key(results[k].leaf), key(results[0].leaf)) << "run " << run;
+    }
+    if (collide_reference(a, b).hit) {
+      ASSERT_TRUE(results[0].hit) << "run " << run;
+    }
+    hits += results[0].hit;
+  }
+  EXPECT_GT(hits, 0);
+  EXPECT_LT(hits, kRuns);
+}
+
 // A small object against a large one: the larger tree splits first, so the
 // fast descent needs far fewer box tests than the simultaneous one.
 TEST(CollideReference, SmallAgainstLargeTakesFewerBoxTests) {
