@@ -11,6 +11,7 @@ packages=(
   libfcl-dev liboctomap-dev                # exact oracle + peer benchmark
   nlohmann-json3-dev libcli11-dev libstb-dev  # scene JSON, CLIs, PNG output
   libxxhash-dev                            # source-file hash (header-only use)
+  clang libclang-rt-dev                    # libFuzzer targets (test.sh's fuzzing pass)
   python3
 )
 missing=()
