@@ -33,8 +33,9 @@ constexpr double kRelPad = 1e-9;
 // cross axes on which both sides of the SAT inequality are pure rounding.
 constexpr double kAxisPad = 1e-9;
 // The padding never falls below kMinPad, so that every radius is at least
-// ~2^-930 (the cross axes' padding is kAxisPad times it). Why: the AVX-512
-// build fuses p + o 2^-d into one rounding, the others round o 2^-d first.
+// ~2^-930 (the cross axes' padding is kAxisPad times it). Why: the AVX2 and
+// AVX-512 builds fuse p + o 2^-d into one rounding, the portable build
+// rounds o 2^-d first.
 // The product is exact unless it is subnormal, and then the two sums can
 // differ only where |p| < 2^-967 (a rounding boundary within 2^-1075 of p +
 // o 2^-d needs p's spacing below 2^-1020): such a value is never above a
@@ -156,9 +157,9 @@ bool occupied(const ObjectTree& tree, int depth, const BoxCoord& c) {
 //
 // Three builds: plain C++, AVX2 and AVX-512. Each lane is at most one
 // multiplication by a power of two, one addition, one absolute value and one
-// ordered comparison; the AVX-512 build fuses the first two (one rounding:
-// exact unless the product is subnormal, which kMinPad makes harmless), so
-// all three give the same results.
+// ordered comparison; the AVX2 and AVX-512 builds fuse the first two (one
+// rounding: exact unless the product is subnormal, which kMinPad makes
+// harmless), so all three give the same results.
 //
 // Each build is a class whose kernel is inlined into the whole pair test,
 // which is compiled once per build and chosen once per pair (run_pair): no
@@ -184,6 +185,12 @@ using v8d_mem = double __attribute__((vector_size(64), aligned(8), may_alias));
 [[gnu::always_inline]] inline void store8(double* p, const v8d& v) { *reinterpret_cast<v8d_mem*>(p) = v; }
 
 struct Portable {
+  // Width of the generic code's per-level and per-pair vectors (radii,
+  // projections): 8 where the kernel reads 8 lanes at once (a load spanning
+  // two stores waits for them), 4 in the AVX2 build (whose 8-lane vectors
+  // times a scalar GCC builds through the stack, element by element).
+  static constexpr int kStoreLanes = 8;
+
   template <bool kScale>
   [[gnu::always_inline]] static uint32_t children_overlap(const double* parent, const double* radius,
                                                           const Lanes* offset, double scale, const uint8_t* octant,
@@ -253,16 +260,31 @@ struct Portable {
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
 #define OCTBAKE_X86_KERNELS 1
 
+// AVX2 with FMA (every AVX2 CPU has it; cpu_has checks both).
 struct Avx2 {
-  [[gnu::always_inline]] static void add_scaled(double* out, const double* a, const double* b, double scale) {
-    Portable::add_scaled(out, a, b, scale);
+  static constexpr int kStoreLanes = 4;
+
+  // As Portable's, the products fused with the sums: the same results (see
+  // kMinPad).
+  [[gnu::target("avx2,fma")]] static void add_scaled(double* out, const double* a, const double* b, double scale) {
+    const __m256d s = _mm256_set1_pd(scale);
+    for (int k = 0; k < kLanes; k += 4)
+      _mm256_storeu_pd(out + k, _mm256_fmadd_pd(_mm256_loadu_pd(b + k), s, _mm256_loadu_pd(a + k)));
   }
-  [[gnu::always_inline]] static void keys(double* key, const double* p, const double (*centre)[8], double scale) {
-    Portable::keys(key, p, centre, scale);
+  [[gnu::target("avx2,fma")]] static void keys(double* key, const double* p, const double (*centre)[8],
+                                               double scale) {
+    const __m256d s = _mm256_set1_pd(scale);
+    for (int h = 0; h < 8; h += 4) {
+      const __m256d x = _mm256_fmadd_pd(_mm256_loadu_pd(centre[0] + h), s, _mm256_set1_pd(p[0]));
+      const __m256d y = _mm256_fmadd_pd(_mm256_loadu_pd(centre[1] + h), s, _mm256_set1_pd(p[1]));
+      const __m256d z = _mm256_fmadd_pd(_mm256_loadu_pd(centre[2] + h), s, _mm256_set1_pd(p[2]));
+      _mm256_storeu_pd(key + h,
+                       _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(x, x), _mm256_mul_pd(y, y)), _mm256_mul_pd(z, z)));
+    }
   }
 
   template <bool kScale>
-  [[gnu::target("avx2")]] static uint32_t children_overlap(const double* parent, const double* radius,
+  [[gnu::target("avx2,fma")]] static uint32_t children_overlap(const double* parent, const double* radius,
                                                          const Lanes* offset, double scale, const uint8_t* octant,
                                                          int n) {
     const __m256d s = _mm256_set1_pd(scale);
@@ -278,7 +300,7 @@ struct Avx2 {
       __m256d separated = _mm256_setzero_pd();
       for (int k = 0; k < 4; ++k) {
         const __m256d ok = _mm256_loadu_pd(o + 4 * k);
-        const __m256d q = _mm256_add_pd(p[k], kScale ? _mm256_mul_pd(ok, s) : ok);
+        const __m256d q = kScale ? _mm256_fmadd_pd(ok, s, p[k]) : _mm256_add_pd(p[k], ok);
         separated = _mm256_or_pd(separated, _mm256_cmp_pd(_mm256_and_pd(q, not_sign), r[k], _CMP_GT_OQ));
       }
       overlapping |= uint32_t(_mm256_testz_pd(separated, separated)) << octant[c];  // no sign bit set
@@ -318,6 +340,8 @@ struct Avx2 {
 };
 
 struct Avx512 {
+  static constexpr int kStoreLanes = 8;
+
   // As Portable's, the products fused with the sums: the same results (see
   // kMinPad).
   [[gnu::target("avx512f")]] static void add_scaled(double* out, const double* a, const double* b, double scale) {
@@ -423,15 +447,14 @@ struct LaneTables {
   store4(out + 12, __builtin_shufflevector(g4, v4d{}, 0, 1, 2, 4));
 }
 
-// out = a + b (times scale if kScale), 16 lanes: a child's projections, its
-// parent's plus its offset, as the kernel computes them.
-template <bool kScale>
-[[gnu::always_inline]] inline void add_lanes(double* out, const double* a, const double* b, double scale) {
+// out = a + b, 16 lanes: a child's projections in collide_all, its parent's
+// plus its offset already scaled to its depth, as the kernel computes them.
+[[gnu::always_inline]] inline void add_lanes(double* out, const double* a, const double* b) {
   for (int k = 0; k < kLanes; k += 8) {
     v8d x, y;
     load8(x, a + k);
     load8(y, b + k);
-    store8(out + k, x + (kScale ? y * scale : y));
+    store8(out + k, x + y);
   }
 }
 
@@ -444,7 +467,7 @@ bool cpu_has(BoxKernel k) {
       return true;
 #ifdef OCTBAKE_X86_KERNELS
     case BoxKernel::avx2:
-      return __builtin_cpu_supports("avx2");
+      return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
     case BoxKernel::avx512:
       return __builtin_cpu_supports("avx512f");
 #else
@@ -563,12 +586,22 @@ class PairFrame {
     const Eigen::Vector3d qb = b_min_ + kHalfPow[db] * b_size_.cwiseProduct(cell_center(cb));
     const Eigen::Vector3d t = (rel_.t + rel_.sr * qb) - qa;
     const Lanes* w = t_.w;
-    for (int k = 0; k < kLanes; k += 8) {
-      v8d w0, w1, w2;
-      load8(w0, w[0] + k);
-      load8(w1, w[1] + k);
-      load8(w2, w[2] + k);
-      store8(p + k, (w0 * t[0] + w1 * t[1]) + w2 * t[2]);
+    if constexpr (K::kStoreLanes == 4) {
+      for (int k = 0; k < kLanes; k += 4) {
+        v4d w0, w1, w2;
+        load4(w0, w[0] + k);
+        load4(w1, w[1] + k);
+        load4(w2, w[2] + k);
+        store4(p + k, (w0 * t[0] + w1 * t[1]) + w2 * t[2]);
+      }
+    } else {
+      for (int k = 0; k < kLanes; k += 8) {
+        v8d w0, w1, w2;
+        load8(w0, w[0] + k);
+        load8(w1, w[1] + k);
+        load8(w2, w[2] + k);
+        store8(p + k, (w0 * t[0] + w1 * t[1]) + w2 * t[2]);
+      }
     }
   }
 
@@ -633,13 +666,21 @@ class PairFrame {
     lv.first_child = split_tree.first_children(lv.d);
     // Radii of the box pairs below: the split side one depth deeper.
     const double ha = kHalfPow[da + sa], hb = kHalfPow[db + !sa];
-    for (int k = 0; k < kLanes; k += 8) {
-      v8d ba, pa, bb, pb;
-      load8(ba, t_.base_a + k);
-      load8(pa, t_.padding_a + k);
-      load8(bb, t_.base_b + k);
-      load8(pb, t_.padding_b + k);
-      store8(lv.radius + k, (ba * ha + pa) + (bb * hb + pb));  // as radius4
+    if constexpr (K::kStoreLanes == 4) {
+      for (int k = 0; k < kLanes; k += 4) {
+        v4d r;
+        radius4(r, k, ha, hb);
+        store4(lv.radius + k, r);
+      }
+    } else {
+      for (int k = 0; k < kLanes; k += 8) {
+        v8d ba, pa, bb, pb;
+        load8(ba, t_.base_a + k);
+        load8(pa, t_.padding_a + k);
+        load8(bb, t_.base_b + k);
+        load8(pb, t_.padding_b + k);
+        store8(lv.radius + k, (ba * ha + pa) + (bb * hb + pb));  // as radius4
+      }
     }
     const Lanes* depth1 = sa ? offsets_a() : offsets_b();
     lv.offset = depth1;
@@ -1013,7 +1054,7 @@ template <class K, class OnLeaf>
           ++m;
           continue;
         }
-        add_lanes<false>(out.p[m], in.p[i], lv.offset[j], 1);
+        add_lanes(out.p[m], in.p[i], lv.offset[j]);
         out.coord[m][0] = in.coord[i][0], out.coord[m][1] = in.coord[i][1];
         out.index[m][0] = in.index[i][0], out.index[m][1] = in.index[i][1];
         out.coord[m][side] = grown;
@@ -1086,7 +1127,7 @@ PairTest run_portable(const Job& job) {
 }
 #ifdef OCTBAKE_X86_KERNELS
 template <bool kAll>
-[[gnu::target("avx2"), gnu::flatten]] PairTest run_avx2(const Job& job) {
+[[gnu::target("avx2,fma"), gnu::flatten]] PairTest run_avx2(const Job& job) {
   return run_pair<Avx2, kAll>(job);
 }
 template <bool kAll>

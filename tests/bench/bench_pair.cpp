@@ -14,6 +14,7 @@
 //   cmake -B build-bench -DCMAKE_BUILD_TYPE=Release -DOCTBAKE_BENCH=ON
 //   cmake --build build-bench --target bench_pair
 //   build-bench/tests/bench_pair --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+//   (--kernel=portable|avx2|avx512: measure that build of the box-test kernel)
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -21,6 +22,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <random>
+#include <string>
+#include <vector>
 
 #include "build_tree.h"
 #include "import.h"
@@ -291,4 +294,30 @@ BENCHMARK(BM_Coherent)->Arg(0)->Arg(1)->ComputeStatistics("min", best_of);
 }  // namespace
 }  // namespace octbake
 
-BENCHMARK_MAIN();
+// --kernel=portable|avx2|avx512: the box-test kernel build to measure
+// (default: the widest the CPU has).
+int main(int argc, char** argv) {
+  std::vector<char*> args;
+  for (int i = 0; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a.rfind("--kernel=", 0) != 0) {
+      args.push_back(argv[i]);
+      continue;
+    }
+    const std::string k = a.substr(9);
+    const octbake::BoxKernel kernel = k == "portable" ? octbake::BoxKernel::portable
+                                      : k == "avx2"   ? octbake::BoxKernel::avx2
+                                      : k == "avx512" ? octbake::BoxKernel::avx512
+                                                      : octbake::BoxKernel::best;
+    if (kernel == octbake::BoxKernel::best || !octbake::use_box_kernel(kernel)) {
+      std::fprintf(stderr, "bench_pair: --kernel=%s: not a kernel this CPU runs (portable, avx2, avx512)\n", k.c_str());
+      return 2;
+    }
+  }
+  int n = int(args.size());
+  benchmark::Initialize(&n, args.data());
+  if (benchmark::ReportUnrecognizedArguments(n, args.data())) return 2;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
