@@ -26,16 +26,19 @@ cmake --build build-tsan -j"$jobs" --target test_tsan
 TSAN_OPTIONS=halt_on_error=1 ctest --test-dir build-tsan --output-on-failure -L tsan
 # Fuzzing: both libFuzzer targets built with clang (ASan + UBSan, -Werror),
 # each run for a fixed number of inputs from a fixed seed, so a run is
-# repeatable; seeds: the golden baked files and the bundled scenes. A crash,
-# leak, hang (20 s an input) or a refusal without a reason fails the run; the
-# input that did it is left in build-fuzz/.
+# repeatable; seeds: the golden baked files and the bundled scenes (read
+# only: libFuzzer adds the inputs it finds to the first folder, here one in
+# build-fuzz/). A crash, leak, hang (20 s an input) or a refusal without a
+# reason fails the run; the input that did it is left in build-fuzz/.
 CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-g -O1" \
   -DCMAKE_CXX_FLAGS="-fsanitize=fuzzer-no-link" -DOCTBAKE_WERROR=ON -DOCTBAKE_FUZZ=ON -DOCTBAKE_SANITIZE=ON \
   -DOCTBAKE_BUILD_TESTS=OFF >/dev/null
 cmake --build build-fuzz -j"$jobs" --target fuzz_baked_file fuzz_scene
 fuzz_options=(-seed=1 -timeout=20 -rss_limit_mb=2048 -artifact_prefix=build-fuzz/ -print_final_stats=1)
-build-fuzz/tests/fuzz_baked_file "${fuzz_options[@]}" -runs=2000000 tests/golden 2>&1 | tail -n 12
-build-fuzz/tests/fuzz_scene "${fuzz_options[@]}" -runs=50000 -max_len=8192 assets/scenes 2>&1 | tail -n 12
+rm -rf build-fuzz/corpus && mkdir -p build-fuzz/corpus/baked build-fuzz/corpus/scene
+build-fuzz/tests/fuzz_baked_file "${fuzz_options[@]}" -runs=2000000 build-fuzz/corpus/baked tests/golden 2>&1 | tail -n 12
+build-fuzz/tests/fuzz_scene "${fuzz_options[@]}" -runs=50000 -max_len=8192 build-fuzz/corpus/scene assets/scenes 2>&1 |
+  tail -n 12
 # Shared libraries (BUILD_SHARED_LIBS=ON) without the analysis tools (so FCL,
 # octomap and stb are proven optional): builds only the runtime, the baker and
 # the public-API test, and runs it and the install consumer (which also checks
