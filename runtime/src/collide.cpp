@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <cstring>
 #include <functional>
+#include <type_traits>
 #include <vector>
 
 #if defined(__x86_64__)
@@ -167,40 +168,95 @@ bool occupied(const ObjectTree& tree, int depth, const BoxCoord& c) {
 constexpr int kLanes = 16;
 using Lanes = double[kLanes];
 
-// Written per chunk of 4 lanes with GCC/Clang vector types, loaded and stored
+// Written per chunk of W lanes with GCC/Clang vector types, loaded and stored
 // through pointers only: the compiler then emits one vector operation per
 // chunk for whatever ISA the caller is built for (left to the
-// auto-vectoriser, these loops came out as shuffles).
-using v4d = double __attribute__((vector_size(32)));
-using v4d_mem = double __attribute__((vector_size(32), aligned(8), may_alias));
-[[gnu::always_inline]] inline void load4(v4d& v, const double* p) { v = *reinterpret_cast<const v4d_mem*>(p); }
-[[gnu::always_inline]] inline void store4(double* p, const v4d& v) { *reinterpret_cast<v4d_mem*>(p) = v; }
+// auto-vectoriser, these loops came out as shuffles). W is the build's native
+// width (kStoreLanes): a vector wider than the ISA's registers times a scalar
+// is built through the stack, element by element (GCC), which cost the old
+// AVX2 build ~40% of a deep pair and the portable build ~5x.
+template <int W>
+struct Chunk;
+template <>
+struct Chunk<2> {
+  using type = double __attribute__((vector_size(16)));
+  using mem = double __attribute__((vector_size(16), aligned(8), may_alias));
+  using mask = int64_t __attribute__((vector_size(16)));
+};
+template <>
+struct Chunk<4> {
+  using type = double __attribute__((vector_size(32)));
+  using mem = double __attribute__((vector_size(32), aligned(8), may_alias));
+  using mask = int64_t __attribute__((vector_size(32)));
+};
+template <>
+struct Chunk<8> {
+  using type = double __attribute__((vector_size(64)));
+  using mem = double __attribute__((vector_size(64), aligned(8), may_alias));
+  using mask = int64_t __attribute__((vector_size(64)));
+};
+template <int W>
+using Vec = typename Chunk<W>::type;
+template <int W>
+[[gnu::always_inline]] inline void load(Vec<W>& v, const double* p) {
+  v = *reinterpret_cast<const typename Chunk<W>::mem*>(p);
+}
+template <int W>
+[[gnu::always_inline]] inline void store(double* p, const Vec<W>& v) {
+  *reinterpret_cast<typename Chunk<W>::mem*>(p) = v;
+}
 // Lanes the descent writes and the kernels read back soon after (a child's
-// projections, a level's radii) go in 8-lane chunks: one zmm store in the
-// AVX-512 build, whose kernel loads 8 lanes at once (a load spanning two
-// narrower stores is not forwarded from them: it waits for them to retire).
-using v8d = double __attribute__((vector_size(64)));
-using v8d_mem = double __attribute__((vector_size(64), aligned(8), may_alias));
-[[gnu::always_inline]] inline void load8(v8d& v, const double* p) { v = *reinterpret_cast<const v8d_mem*>(p); }
-[[gnu::always_inline]] inline void store8(double* p, const v8d& v) { *reinterpret_cast<v8d_mem*>(p) = v; }
+// projections, a level's radii) go in chunks of the kernel's load width: one
+// zmm store in the AVX-512 build, whose kernel loads 8 lanes at once (a load
+// spanning two narrower stores is not forwarded from them: it waits for them
+// to retire).
+using v4d = Vec<4>;
+using v8d = Vec<8>;
+[[gnu::always_inline]] inline void load4(v4d& v, const double* p) { load<4>(v, p); }
+[[gnu::always_inline]] inline void store4(double* p, const v4d& v) { store<4>(p, v); }
+
+// separated |= (|x| > r) lane by lane: as two ordered comparisons (negation
+// is exact; NaN compares false either way), for vectors of any width.
+template <int W>
+[[gnu::always_inline]] inline void mark_exceeding(typename Chunk<W>::mask& separated, const Vec<W>& x,
+                                                  const Vec<W>& r) {
+  separated |= (x > r) | (-x > r);
+}
+template <int W>
+[[gnu::always_inline]] inline bool any_lane(const typename Chunk<W>::mask& m) {
+  int64_t any = 0;
+  for (int i = 0; i < W; ++i) any |= m[i];
+  return any != 0;
+}
 
 struct Portable {
-  // Width of the generic code's per-level and per-pair vectors (radii,
-  // projections): 8 where the kernel reads 8 lanes at once (a load spanning
-  // two stores waits for them), 4 in the AVX2 build (whose 8-lane vectors
-  // times a scalar GCC builds through the stack, element by element).
-  static constexpr int kStoreLanes = 8;
+  // Width of the generic code's vectors (radii, projections, offsets): the
+  // kernel's load width, and the ISA's register width in the AVX2 build (4)
+  // and here (2: SSE2, and NEON on ARM).
+  static constexpr int kStoreLanes = 2;
+  using V = Vec<kStoreLanes>;
+  using M = typename Chunk<kStoreLanes>::mask;
+  static constexpr int kChunks = kLanes / kStoreLanes;
 
   template <bool kScale>
   [[gnu::always_inline]] static uint32_t children_overlap(const double* parent, const double* radius,
                                                           const Lanes* offset, double scale, const uint8_t* octant,
                                                           int n) {
+    V p[kChunks], r[kChunks];
+    for (int k = 0; k < kChunks; ++k) {
+      load<kStoreLanes>(p[k], parent + kStoreLanes * k);
+      load<kStoreLanes>(r[k], radius + kStoreLanes * k);
+    }
     uint32_t overlapping = 0;
     for (int c = 0; c < n; ++c) {
       const double* o = offset[octant[c]];
-      bool separated = false;
-      for (int k = 0; k < kLanes; ++k) separated |= std::abs(parent[k] + (kScale ? o[k] * scale : o[k])) > radius[k];
-      overlapping |= uint32_t(!separated) << octant[c];
+      M separated{};
+      for (int k = 0; k < kChunks; ++k) {
+        V ok;
+        load<kStoreLanes>(ok, o + kStoreLanes * k);
+        mark_exceeding<kStoreLanes>(separated, kScale ? p[k] + ok * scale : p[k] + ok, r[k]);
+      }
+      overlapping |= uint32_t(!any_lane<kStoreLanes>(separated)) << octant[c];
     }
     return overlapping;
   }
@@ -210,32 +266,38 @@ struct Portable {
   // overlaps iff it passes both halves.
   template <int kHalf>
   [[gnu::always_inline]] static bool half_overlaps(const double* p, const double* offset, const double* radius) {
-    bool separated = false;
-    for (int k = 8 * kHalf; k < 8 * kHalf + 8; ++k) separated |= std::abs(p[k] + offset[k]) > radius[k];
-    return !separated;
+    M separated{};
+    for (int k = 8 * kHalf; k < 8 * kHalf + 8; k += kStoreLanes) {
+      V x, y, r;
+      load<kStoreLanes>(x, p + k);
+      load<kStoreLanes>(y, offset + k);
+      load<kStoreLanes>(r, radius + k);
+      mark_exceeding<kStoreLanes>(separated, x + y, r);
+    }
+    return !any_lane<kStoreLanes>(separated);
   }
 
   // out = a + b * scale, 16 lanes: a child's projections from its parent's
   // and its offset, as children_overlap computes them.
   [[gnu::always_inline]] static void add_scaled(double* out, const double* a, const double* b, double scale) {
-    for (int k = 0; k < kLanes; k += 8) {
-      v8d x, y;
-      load8(x, a + k);
-      load8(y, b + k);
-      store8(out + k, x + y * scale);
+    for (int k = 0; k < kLanes; k += kStoreLanes) {
+      V x, y;
+      load<kStoreLanes>(x, a + k);
+      load<kStoreLanes>(y, b + k);
+      store<kStoreLanes>(out + k, x + y * scale);
     }
   }
 
   // The nearest-first keys of the 8 children: key[j] = the squared length of
   // lanes 0..2 of child j's projections, p[k] + centre[k][j] * scale.
   [[gnu::always_inline]] static void keys(double* key, const double* p, const double (*centre)[8], double scale) {
-    for (int h = 0; h < 8; h += 4) {
-      v4d x, y, z;
-      load4(x, centre[0] + h);
-      load4(y, centre[1] + h);
-      load4(z, centre[2] + h);
+    for (int h = 0; h < 8; h += kStoreLanes) {
+      V x, y, z;
+      load<kStoreLanes>(x, centre[0] + h);
+      load<kStoreLanes>(y, centre[1] + h);
+      load<kStoreLanes>(z, centre[2] + h);
       x = p[0] + x * scale, y = p[1] + y * scale, z = p[2] + z * scale;
-      store4(key + h, (x * x + y * y) + z * z);
+      store<kStoreLanes>(key + h, (x * x + y * y) + z * z);
     }
   }
 
@@ -411,34 +473,64 @@ struct LaneTables {
 // A child at depth 1 sits at the root's centre +- q on each axis m of its
 // tree; weights[m] give the effect on the projections (times sign). Octants
 // 7 - j are the negations of octants j (negation is exact).
-[[gnu::always_inline]] inline void fill_offsets(Lanes* offset, const v8d (*weights)[2], const double* q,
+// weights[m][c]: lanes W c..W c + W - 1 of axis m's weights.
+template <int W>
+[[gnu::always_inline]] inline void fill_offsets(Lanes* offset, const Vec<W> (*weights)[kLanes / W], const double* q,
                                                 double sign) {
   const double f0 = sign * q[0], f1 = sign * q[1], f2 = sign * q[2];
-  for (int c = 0; c < 2; ++c) {
-    const v8d e0 = weights[0][c] * f0, e1 = weights[1][c] * f1, e2 = weights[2][c] * f2;
-    const v8d s01 = e0 + e1, d01 = e0 - e1;  // +x+y, +x-y
-    const v8d o0 = -(s01 + e2), o1 = d01 - e2, o2 = -(d01 + e2), o3 = s01 - e2;
-    store8(offset[0] + 8 * c, o0);  // -x-y-z
-    store8(offset[1] + 8 * c, o1);  // +x-y-z
-    store8(offset[2] + 8 * c, o2);  // -x+y-z
-    store8(offset[3] + 8 * c, o3);  // +x+y-z
-    store8(offset[7] + 8 * c, -o0);
-    store8(offset[6] + 8 * c, -o1);
-    store8(offset[5] + 8 * c, -o2);
-    store8(offset[4] + 8 * c, -o3);
+  for (int c = 0; c < kLanes / W; ++c) {
+    const Vec<W> e0 = weights[0][c] * f0, e1 = weights[1][c] * f1, e2 = weights[2][c] * f2;
+    const Vec<W> s01 = e0 + e1, d01 = e0 - e1;  // +x+y, +x-y
+    const Vec<W> o0 = -(s01 + e2), o1 = d01 - e2, o2 = -(d01 + e2), o3 = s01 - e2;
+    store<W>(offset[0] + W * c, o0);  // -x-y-z
+    store<W>(offset[1] + W * c, o1);  // +x-y-z
+    store<W>(offset[2] + W * c, o2);  // -x+y-z
+    store<W>(offset[3] + W * c, o3);  // +x+y-z
+    store<W>(offset[7] + W * c, -o0);
+    store<W>(offset[6] + W * c, -o1);
+    store<W>(offset[5] + W * c, -o2);
+    store<W>(offset[4] + W * c, -o3);
   }
 }
 
+// A group: three lanes of a lane table under construction, and a fourth
+// (zero when made, and not stored). A 4-lane vector, or in the portable build
+// (2-lane registers) two halves, where 4-lane vectors are built through the
+// stack. The same operations lane by lane either way: the same bits.
+struct HalfPair {
+  Vec<2> lo, hi;  // lanes 0, 1 and 2, 3
+};
+[[gnu::always_inline]] inline HalfPair operator+(const HalfPair& a, const HalfPair& b) {
+  return {a.lo + b.lo, a.hi + b.hi};
+}
+[[gnu::always_inline]] inline HalfPair operator*(const HalfPair& a, const HalfPair& b) {
+  return {a.lo * b.lo, a.hi * b.hi};
+}
+[[gnu::always_inline]] inline HalfPair operator*(const HalfPair& a, double s) { return {a.lo * s, a.hi * s}; }
+[[gnu::always_inline]] inline HalfPair operator-(const HalfPair& a) { return {-a.lo, -a.hi}; }
+template <int W>
+using Group = std::conditional_t<W == 2, HalfPair, v4d>;
+
 // {a, b, c, 0} built in registers (as v4d{a, b, c, 0}, GCC wrote the four
 // to the stack and read them back as one vector, which waits for the stores).
-[[gnu::always_inline]] inline void make4(v4d& out, double a, double b, double c) {
-  using v2d = double __attribute__((vector_size(16)));
-  const v2d lo = {a, b}, hi = {c, 0};
+[[gnu::always_inline]] inline void make_group(v4d& out, double a, double b, double c) {
+  const Vec<2> lo = {a, b}, hi = {c, 0};
   out = __builtin_shufflevector(lo, hi, 0, 1, 2, 3);
 }
+[[gnu::always_inline]] inline void make_group(HalfPair& out, double a, double b, double c) {
+  out = {Vec<2>{a, b}, Vec<2>{c, 0}};
+}
+// The lanes {2, 2, 1} and {1, 0, 0} of g (the cross axes' other two terms).
+[[gnu::always_inline]] inline void cross_lanes(const v4d& g, v4d& x, v4d& y) {
+  x = __builtin_shufflevector(g, g, 2, 2, 1, 3), y = __builtin_shufflevector(g, g, 1, 0, 0, 3);
+}
+[[gnu::always_inline]] inline void cross_lanes(const HalfPair& g, HalfPair& x, HalfPair& y) {
+  x = {__builtin_shufflevector(g.hi, g.hi, 0, 0), __builtin_shufflevector(g.lo, g.hi, 1, 3)};
+  y = {__builtin_shufflevector(g.lo, g.lo, 1, 0), __builtin_shufflevector(g.lo, g.hi, 0, 3)};
+}
 
-// 16 lanes from five groups of three (lanes 0..2 of g0..g4), lane 15 zero:
-// four aligned stores (one load of a lane chunk then finds one store).
+// 16 lanes from five groups (lanes 0..2 of g0..g4), lane 15 zero: aligned
+// stores of the build's width (one load of a lane chunk then finds one store).
 [[gnu::always_inline]] inline void store_groups(double* out, const v4d& g0, const v4d& g1, const v4d& g2,
                                                 const v4d& g3, const v4d& g4) {
   store4(out, __builtin_shufflevector(g0, g1, 0, 1, 2, 4));
@@ -446,15 +538,27 @@ struct LaneTables {
   store4(out + 8, __builtin_shufflevector(g2, g3, 2, 4, 5, 6));
   store4(out + 12, __builtin_shufflevector(g4, v4d{}, 0, 1, 2, 4));
 }
+[[gnu::always_inline]] inline void store_groups(double* out, const HalfPair& g0, const HalfPair& g1,
+                                                const HalfPair& g2, const HalfPair& g3, const HalfPair& g4) {
+  store<2>(out, g0.lo);
+  store<2>(out + 2, __builtin_shufflevector(g0.hi, g1.lo, 0, 2));
+  store<2>(out + 4, __builtin_shufflevector(g1.lo, g1.hi, 1, 2));
+  store<2>(out + 6, g2.lo);
+  store<2>(out + 8, __builtin_shufflevector(g2.hi, g3.lo, 0, 2));
+  store<2>(out + 10, __builtin_shufflevector(g3.lo, g3.hi, 1, 2));
+  store<2>(out + 12, g4.lo);
+  store<2>(out + 14, __builtin_shufflevector(g4.hi, Vec<2>{}, 0, 2));
+}
 
 // out = a + b, 16 lanes: a child's projections in collide_all, its parent's
 // plus its offset already scaled to its depth, as the kernel computes them.
+template <int W>
 [[gnu::always_inline]] inline void add_lanes(double* out, const double* a, const double* b) {
-  for (int k = 0; k < kLanes; k += 8) {
-    v8d x, y;
-    load8(x, a + k);
-    load8(y, b + k);
-    store8(out + k, x + y);
+  for (int k = 0; k < kLanes; k += W) {
+    Vec<W> x, y;
+    load<W>(x, a + k);
+    load<W>(y, b + k);
+    store<W>(out + k, x + y);
   }
 }
 
@@ -506,6 +610,9 @@ struct Level {
 // (scaled) offsets.
 template <class K>
 class PairFrame {
+  static constexpr int W = K::kStoreLanes;  // the build's vector width
+  using V = Vec<W>;
+
  public:
   [[gnu::always_inline]] PairFrame(const PlacedTree& a, const PlacedTree& b)
       : rel_(a, b) {
@@ -513,19 +620,24 @@ class PairFrame {
     const Eigen::Matrix3d& abs_r = rel_.abs_r;
     // Lanes as in the kernel, built from the rows of R and |R| and the
     // columns of |R| (|R| padded; lane 3 zero) in groups of three lanes.
-    v4d rr[3], ar[3], ac[3];
+    using G = Group<W>;
+    G rr[3], ar[3], ac[3];
     for (int m = 0; m < 3; ++m) {
-      make4(rr[m], r(m, 0), r(m, 1), r(m, 2));
-      make4(ar[m], abs_r(m, 0), abs_r(m, 1), abs_r(m, 2));
-      make4(ac[m], abs_r(0, m), abs_r(1, m), abs_r(2, m));
+      make_group(rr[m], r(m, 0), r(m, 1), r(m, 2));
+      make_group(ar[m], abs_r(m, 0), abs_r(m, 1), abs_r(m, 2));
+      make_group(ac[m], abs_r(0, m), abs_r(1, m), abs_r(2, m));
     }
     // t_.w[m]: weight of t_m in each projection: e_m on A's faces, row m of R
     // on B's, and on A_i x B_j (t_i2 r_i1j - t_i1 r_i2j) row i1 where m = i2,
     // minus row i2 where m = i1.
-    const v4d zero{};
-    store_groups(t_.w[0], v4d{1, 0, 0, 0}, rr[0], zero, rr[2], -rr[1]);
-    store_groups(t_.w[1], v4d{0, 1, 0, 0}, rr[1], -rr[2], zero, rr[0]);
-    store_groups(t_.w[2], v4d{0, 0, 1, 0}, rr[2], rr[1], -rr[0], zero);
+    G zero, e[3];
+    make_group(zero, 0, 0, 0);
+    make_group(e[0], 1, 0, 0);
+    make_group(e[1], 0, 1, 0);
+    make_group(e[2], 0, 0, 1);
+    store_groups(t_.w[0], e[0], rr[0], zero, rr[2], -rr[1]);
+    store_groups(t_.w[1], e[1], rr[1], -rr[2], zero, rr[0]);
+    store_groups(t_.w[2], e[2], rr[2], rr[1], -rr[0], zero);
     const Aabb& ba = a.tree->bounds();
     const Aabb& bb = b.tree->bounds();
     a_min_ = ba.min;
@@ -541,19 +653,25 @@ class PairFrame {
     const double h0 = 0.5 * a_size_[0], h1 = 0.5 * a_size_[1], h2 = 0.5 * a_size_[2];
     const double g0 = 0.5 * rel_.s * b_size_[0], g1 = 0.5 * rel_.s * b_size_[1], g2 = 0.5 * rel_.s * b_size_[2];
     const double pad = rel_.pad;
-    const v4d pads{pad, pad, pad, 0};
-    store_groups(t_.base_a, v4d{h0, h1, h2, 0}, (ar[0] * h0 + ar[1] * h1) + ar[2] * h2, ar[2] * h1 + ar[1] * h2,
+    G pads, half_a, half_b;
+    make_group(pads, pad, pad, pad);
+    make_group(half_a, h0, h1, h2);
+    make_group(half_b, g0, g1, g2);
+    store_groups(t_.base_a, half_a, (ar[0] * h0 + ar[1] * h1) + ar[2] * h2, ar[2] * h1 + ar[1] * h2,
                  ar[2] * h0 + ar[0] * h2, ar[1] * h0 + ar[0] * h1);
     store_groups(t_.padding_a, pads, ((ar[0] + ar[1]) + ar[2]) * pad, (ar[2] + ar[1]) * pad, (ar[2] + ar[0]) * pad,
                  (ar[1] + ar[0]) * pad);
-    const v4d gj1{g1, g0, g0, 0}, gj2{g2, g2, g1, 0};  // g_j1 / g_j2 by lane j, each in the order of g
-    v4d cross_b[3], cross_pad_b[3];
+    G gj1, gj2;  // g_j1 / g_j2 by lane j, each in the order of g
+    make_group(gj1, g1, g0, g0);
+    make_group(gj2, g2, g2, g1);
+    G cross_b[3], cross_pad_b[3];
     for (int i = 0; i < 3; ++i) {
-      const v4d x = __builtin_shufflevector(ar[i], ar[i], 2, 2, 1, 3), y = __builtin_shufflevector(ar[i], ar[i], 1, 0, 0, 3);
+      G x, y;
+      cross_lanes(ar[i], x, y);
       cross_b[i] = gj1 * x + gj2 * y;
       cross_pad_b[i] = (x + y) * pad;
     }
-    store_groups(t_.base_b, (ac[0] * g0 + ac[1] * g1) + ac[2] * g2, v4d{g0, g1, g2, 0}, cross_b[0], cross_b[1],
+    store_groups(t_.base_b, (ac[0] * g0 + ac[1] * g1) + ac[2] * g2, half_b, cross_b[0], cross_b[1],
                  cross_b[2]);
     store_groups(t_.padding_b, ((ac[0] + ac[1]) + ac[2]) * pad, pads, cross_pad_b[0], cross_pad_b[1],
                  cross_pad_b[2]);
@@ -586,35 +704,24 @@ class PairFrame {
     const Eigen::Vector3d qb = b_min_ + kHalfPow[db] * b_size_.cwiseProduct(cell_center(cb));
     const Eigen::Vector3d t = (rel_.t + rel_.sr * qb) - qa;
     const Lanes* w = t_.w;
-    if constexpr (K::kStoreLanes == 4) {
-      for (int k = 0; k < kLanes; k += 4) {
-        v4d w0, w1, w2;
-        load4(w0, w[0] + k);
-        load4(w1, w[1] + k);
-        load4(w2, w[2] + k);
-        store4(p + k, (w0 * t[0] + w1 * t[1]) + w2 * t[2]);
-      }
-    } else {
-      for (int k = 0; k < kLanes; k += 8) {
-        v8d w0, w1, w2;
-        load8(w0, w[0] + k);
-        load8(w1, w[1] + k);
-        load8(w2, w[2] + k);
-        store8(p + k, (w0 * t[0] + w1 * t[1]) + w2 * t[2]);
-      }
+    for (int k = 0; k < kLanes; k += W) {
+      V w0, w1, w2;
+      load<W>(w0, w[0] + k);
+      load<W>(w1, w[1] + k);
+      load<W>(w2, w[2] + k);
+      store<W>(p + k, (w0 * t[0] + w1 * t[1]) + w2 * t[2]);
     }
   }
 
   bool overlap(const double* p, int da, int db) const {
-    using v4l = int64_t __attribute__((vector_size(32)));
-    v4l separated{};
-    for (int k = 0; k < kLanes; k += 4) {
-      v4d pk, r;
-      load4(pk, p + k);
-      radius4(r, k, kHalfPow[da], kHalfPow[db]);
-      separated |= (pk > r) | (-pk > r);  // |p| > r (negation is exact)
+    typename Chunk<W>::mask separated{};
+    for (int k = 0; k < kLanes; k += W) {
+      V pk, r;
+      load<W>(pk, p + k);
+      radius(r, k, kHalfPow[da], kHalfPow[db]);
+      mark_exceeding<W>(separated, pk, r);
     }
-    return !(separated[0] | separated[1] | separated[2] | separated[3]);
+    return !any_lane<W>(separated);
   }
 
   // Does the padded box of one side lie inside the other's, with a margin of
@@ -666,21 +773,10 @@ class PairFrame {
     lv.first_child = split_tree.first_children(lv.d);
     // Radii of the box pairs below: the split side one depth deeper.
     const double ha = kHalfPow[da + sa], hb = kHalfPow[db + !sa];
-    if constexpr (K::kStoreLanes == 4) {
-      for (int k = 0; k < kLanes; k += 4) {
-        v4d r;
-        radius4(r, k, ha, hb);
-        store4(lv.radius + k, r);
-      }
-    } else {
-      for (int k = 0; k < kLanes; k += 8) {
-        v8d ba, pa, bb, pb;
-        load8(ba, t_.base_a + k);
-        load8(pa, t_.padding_a + k);
-        load8(bb, t_.base_b + k);
-        load8(pb, t_.padding_b + k);
-        store8(lv.radius + k, (ba * ha + pa) + (bb * hb + pb));  // as radius4
-      }
+    for (int k = 0; k < kLanes; k += W) {
+      V r;
+      radius(r, k, ha, hb);
+      store<W>(lv.radius + k, r);
     }
     const Lanes* depth1 = sa ? offsets_a() : offsets_b();
     lv.offset = depth1;
@@ -692,10 +788,10 @@ class PairFrame {
         const double h = kHalfPow[lv.d];
         Lanes* scaled = level_offsets_[l];
         for (int j = 0; j < 8; ++j)
-          for (int k = 0; k < kLanes; k += 8) {
-            v8d x;
-            load8(x, depth1[j] + k);
-            store8(scaled[j] + k, x * h);
+          for (int k = 0; k < kLanes; k += W) {
+            V x;
+            load<W>(x, depth1[j] + k);
+            store<W>(scaled[j] + k, x * h);
           }
         lv.offset = scaled;
       }
@@ -721,55 +817,62 @@ class PairFrame {
         row[h][1] = __builtin_shufflevector(t1, t3, 0, 1, 4, 5);
         row[h][2] = __builtin_shufflevector(t0, t2, 2, 3, 6, 7);
       }
-      for (int k = 0; k < 3; ++k) store8(centre[k], __builtin_shufflevector(row[0][k], row[1][k], 0, 1, 2, 3, 4, 5, 6, 7));
+      for (int k = 0; k < 3; ++k) {
+        if constexpr (W == 8) {
+          store<8>(centre[k], __builtin_shufflevector(row[0][k], row[1][k], 0, 1, 2, 3, 4, 5, 6, 7));
+        } else {
+          store4(centre[k], row[0][k]);
+          store4(centre[k] + 4, row[1][k]);
+        }
+      }
       filled_offsets_ |= bit;
     }
     return centre;
   }
 
-  // W in 8-lane chunks: w[m][c] = lanes 8c..8c+7 of t_.w[m].
-  void load_weights(v8d (&w)[3][2]) const {
+  // The projection matrix in chunks: w[m][c] = lanes W c..W c + W - 1 of t_.w[m].
+  void load_weights(V (&w)[3][kLanes / W]) const {
     for (int m = 0; m < 3; ++m)
-      for (int c = 0; c < 2; ++c) load8(w[m][c], t_.w[m] + 8 * c);
+      for (int c = 0; c < kLanes / W; ++c) load<W>(w[m][c], t_.w[m] + W * c);
   }
 
   // The depth-1 child offsets of A's (B's) root, filled on first use.
   const Lanes* offsets_a() const {
     if (!(filled_offsets_ & 1u)) {
-      v8d w[3][2];
+      V w[3][kLanes / W];
       load_weights(w);
       const double quarter[3] = {0.25 * a_size_[0], 0.25 * a_size_[1], 0.25 * a_size_[2]};
       // t = centre B - centre A: A's child moving by +q moves t by -q.
-      fill_offsets(t_.offset_a, w, quarter, -1.0);
+      fill_offsets<W>(t_.offset_a, w, quarter, -1.0);
       filled_offsets_ |= 1u;
     }
     return t_.offset_a;
   }
   const Lanes* offsets_b() const {
     if (!(filled_offsets_ & 2u)) {
-      v8d w[3][2];
+      V w[3][kLanes / W];
       load_weights(w);
       // B's local axis j moves its centre by sR e_j in A's frame.
       const Eigen::Matrix3d& sr = rel_.sr;
-      v8d wb[3][2];
-      for (int c = 0; c < 2; ++c)
+      V wb[3][kLanes / W];
+      for (int c = 0; c < kLanes / W; ++c)
         for (int j = 0; j < 3; ++j) wb[j][c] = (w[0][c] * sr(0, j) + w[1][c] * sr(1, j)) + w[2][c] * sr(2, j);
       const double quarter[3] = {0.25 * b_size_[0], 0.25 * b_size_[1], 0.25 * b_size_[2]};
-      fill_offsets(t_.offset_b, wb, quarter, 1.0);
+      fill_offsets<W>(t_.offset_b, wb, quarter, 1.0);
       filled_offsets_ |= 2u;
     }
     return t_.offset_b;
   }
 
-  // Lanes k..k+3 of the summed radii of A's box at scale ha = 2^-da and B's
+  // Lanes k..k+W-1 of the summed radii of A's box at scale ha = 2^-da and B's
   // at hb: each radius is base * 2^-d + padding (computed where needed: a
   // table per depth cost more than it saved).
-  [[gnu::always_inline]] void radius4(v4d& r, int k, double ha, double hb) const {
-    v4d ba, pa, bb, pb;
-    load4(ba, t_.base_a + k);
-    load4(pa, t_.padding_a + k);
-    load4(bb, t_.base_b + k);
-    load4(pb, t_.padding_b + k);
+  [[gnu::always_inline]] void radius(V& r, int k, double ha, double hb) const {
+    V ba, pa, bb, pb;
+    load<W>(ba, t_.base_a + k);
+    load<W>(pa, t_.padding_a + k);
+    load<W>(bb, t_.base_b + k);
+    load<W>(pb, t_.padding_b + k);
     r = (ba * ha + pa) + (bb * hb + pb);
   }
 
@@ -1054,7 +1157,7 @@ template <class K, class OnLeaf>
           ++m;
           continue;
         }
-        add_lanes(out.p[m], in.p[i], lv.offset[j]);
+        add_lanes<K::kStoreLanes>(out.p[m], in.p[i], lv.offset[j]);
         out.coord[m][0] = in.coord[i][0], out.coord[m][1] = in.coord[i][1];
         out.index[m][0] = in.index[i][0], out.index[m][1] = in.index[i][1];
         out.coord[m][side] = grown;
