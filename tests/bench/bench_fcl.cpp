@@ -16,6 +16,7 @@
 //
 // Build with -DOCTBAKE_BENCH=ON, then from the source root:
 //   build/tests/bench_fcl --benchmark_repetitions=3 [--scene=PATH ...] [--meshes=DIR] [--frames=N] [--csv=FILE]
+//     [--kernel=portable|avx2|avx512] (kernel_option.h)
 // Default scenes: assets/scenes/test1.json and test2.json (the thesis's), and
 // scales.json (sizes 536x apart) and flythrough.json (all rotated, half
 // spinning, camera on a path), meshes in assets/;
@@ -44,6 +45,7 @@
 #include "import.h"
 #include "exact.h"
 #include "gen.h"
+#include "kernel_option.h"
 #include "octbake/collide.h"
 #include "octbake/collision_world.h"
 #include "octbake/motion.h"
@@ -605,6 +607,7 @@ class Collector : public benchmark::ConsoleReporter {
 
 int main(int argc, char** argv) {
   using namespace octbake::scene;
+  if (!octbake::take_kernel_option(argc, argv, "bench_fcl")) return 2;
   benchmark::Initialize(&argc, argv);
   std::vector<std::string> scene_paths;
   std::string meshes_dir, csv_path;

@@ -27,6 +27,7 @@
 
 #include "build_tree.h"
 #include "import.h"
+#include "kernel_option.h"
 #include "octbake/collide.h"
 #include "seeded_random.h"
 
@@ -295,28 +296,11 @@ BENCHMARK(BM_Coherent)->Arg(0)->Arg(1)->ComputeStatistics("min", best_of);
 }  // namespace octbake
 
 // --kernel=portable|avx2|avx512: the box-test kernel build to measure
-// (default: the widest the CPU has).
+// (kernel_option.h).
 int main(int argc, char** argv) {
-  std::vector<char*> args;
-  for (int i = 0; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a.rfind("--kernel=", 0) != 0) {
-      args.push_back(argv[i]);
-      continue;
-    }
-    const std::string k = a.substr(9);
-    const octbake::BoxKernel kernel = k == "portable" ? octbake::BoxKernel::portable
-                                      : k == "avx2"   ? octbake::BoxKernel::avx2
-                                      : k == "avx512" ? octbake::BoxKernel::avx512
-                                                      : octbake::BoxKernel::best;
-    if (kernel == octbake::BoxKernel::best || !octbake::use_box_kernel(kernel)) {
-      std::fprintf(stderr, "bench_pair: --kernel=%s: not a kernel this CPU runs (portable, avx2, avx512)\n", k.c_str());
-      return 2;
-    }
-  }
-  int n = int(args.size());
-  benchmark::Initialize(&n, args.data());
-  if (benchmark::ReportUnrecognizedArguments(n, args.data())) return 2;
+  if (!octbake::take_kernel_option(argc, argv, "bench_pair")) return 2;
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 2;
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
   return 0;

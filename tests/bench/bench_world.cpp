@@ -16,6 +16,7 @@
 //
 // Run: build with -DOCTBAKE_BENCH=ON, then
 //   ./build/tests/bench_world --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+//   [--kernel=portable|avx2|avx512]
 // operator new/delete are replaced below (malloc/free): GCC 12 then flags
 // every inlined delete as "mismatched" though the pair is consistent.
 #pragma GCC diagnostic ignored "-Wmismatched-new-delete"
@@ -35,6 +36,7 @@
 #include <thread>
 #include <vector>
 
+#include "kernel_option.h"
 #include "legacy_world.h"
 #include "octbake/collision_world.h"
 #include "octbake/world.h"
@@ -749,4 +751,13 @@ BENCHMARK(BM_PoolJob)
 }  // namespace
 }  // namespace octbake
 
-BENCHMARK_MAIN();
+// --kernel=portable|avx2|avx512: the box-test kernel build to measure
+// (kernel_option.h).
+int main(int argc, char** argv) {
+  if (!octbake::take_kernel_option(argc, argv, "bench_world")) return 2;
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 2;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

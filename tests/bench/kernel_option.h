@@ -1,0 +1,39 @@
+// --kernel=portable|avx2|avx512 for the benchmarks: measure that build of the
+// box-test kernel (default: the widest the CPU has). The builds differ in
+// speed only (the same hits, counts and leaf pairs), and a CPU with AVX-512
+// can thus show what an AVX2-only or an ARM user gets.
+#pragma once
+
+#include "octbake/collide.h"
+
+#include <cstdio>
+#include <string>
+
+namespace octbake {
+
+// Takes every --kernel=NAME out of argv (argc updated) and selects that
+// kernel. False, with one error line naming `tool`, if NAME is unknown or this
+// CPU cannot run it.
+inline bool take_kernel_option(int& argc, char** argv, const char* tool) {
+  int kept = 0;
+  for (int i = 0; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (i == 0 || a.rfind("--kernel=", 0) != 0) {
+      argv[kept++] = argv[i];
+      continue;
+    }
+    const std::string k = a.substr(9);
+    const BoxKernel kernel = k == "portable" ? BoxKernel::portable
+                             : k == "avx2"   ? BoxKernel::avx2
+                             : k == "avx512" ? BoxKernel::avx512
+                                             : BoxKernel::best;
+    if (kernel == BoxKernel::best || !use_box_kernel(kernel)) {
+      std::fprintf(stderr, "%s: --kernel=%s: not a kernel this CPU runs (portable, avx2, avx512)\n", tool, k.c_str());
+      return false;
+    }
+  }
+  argc = kept;
+  return true;
+}
+
+}  // namespace octbake
