@@ -12,6 +12,7 @@ packages=(
   nlohmann-json3-dev libcli11-dev libstb-dev  # scene JSON, CLIs, PNG output
   libxxhash-dev                            # source-file hash (header-only use)
   clang libclang-rt-dev                    # libFuzzer targets (test.sh's fuzzing pass)
+  g++-aarch64-linux-gnu                    # the runtime compiled for ARM (test.sh, scripts/check_aarch64.sh)
   python3
 )
 missing=()
