@@ -215,12 +215,14 @@ using v8d = Vec<8>;
 [[gnu::always_inline]] inline void load4(v4d& v, const double* p) { load<4>(v, p); }
 [[gnu::always_inline]] inline void store4(double* p, const v4d& v) { store<4>(p, v); }
 
-// separated |= (|x| > r) lane by lane: as two ordered comparisons (negation
-// is exact; NaN compares false either way), for vectors of any width.
+// separated |= (|x| > r) lane by lane, for vectors of any width: |x| is x
+// with its sign bit cleared (one AND; a vector cast keeps the bits), and an
+// ordered comparison (NaN compares false).
 template <int W>
 [[gnu::always_inline]] inline void mark_exceeding(typename Chunk<W>::mask& separated, const Vec<W>& x,
                                                   const Vec<W>& r) {
-  separated |= (x > r) | (-x > r);
+  using M = typename Chunk<W>::mask;
+  separated |= Vec<W>(M(x) & INT64_MAX) > r;
 }
 template <int W>
 [[gnu::always_inline]] inline bool any_lane(const typename Chunk<W>::mask& m) {
