@@ -174,7 +174,7 @@ using Lanes = double[kLanes];
 // auto-vectoriser, these loops came out as shuffles). W is the build's native
 // width (kStoreLanes): a vector wider than the ISA's registers times a scalar
 // is built through the stack, element by element (GCC), which cost the old
-// AVX2 build ~40% of a deep pair and the portable build ~5x.
+// AVX2 build ~40% of a deep pair and the portable build up to 5x.
 template <int W>
 struct Chunk;
 template <>
@@ -211,9 +211,6 @@ template <int W>
 // spanning two narrower stores is not forwarded from them: it waits for them
 // to retire).
 using v4d = Vec<4>;
-using v8d = Vec<8>;
-[[gnu::always_inline]] inline void load4(v4d& v, const double* p) { load<4>(v, p); }
-[[gnu::always_inline]] inline void store4(double* p, const v4d& v) { store<4>(p, v); }
 
 // separated |= (|x| > r) lane by lane, for vectors of any width: |x| is x
 // with its sign bit cleared (one AND; a vector cast keeps the bits), and an
@@ -535,10 +532,10 @@ using Group = std::conditional_t<W == 2, HalfPair, v4d>;
 // stores of the build's width (one load of a lane chunk then finds one store).
 [[gnu::always_inline]] inline void store_groups(double* out, const v4d& g0, const v4d& g1, const v4d& g2,
                                                 const v4d& g3, const v4d& g4) {
-  store4(out, __builtin_shufflevector(g0, g1, 0, 1, 2, 4));
-  store4(out + 4, __builtin_shufflevector(g1, g2, 1, 2, 4, 5));
-  store4(out + 8, __builtin_shufflevector(g2, g3, 2, 4, 5, 6));
-  store4(out + 12, __builtin_shufflevector(g4, v4d{}, 0, 1, 2, 4));
+  store<4>(out, __builtin_shufflevector(g0, g1, 0, 1, 2, 4));
+  store<4>(out + 4, __builtin_shufflevector(g1, g2, 1, 2, 4, 5));
+  store<4>(out + 8, __builtin_shufflevector(g2, g3, 2, 4, 5, 6));
+  store<4>(out + 12, __builtin_shufflevector(g4, v4d{}, 0, 1, 2, 4));
 }
 [[gnu::always_inline]] inline void store_groups(double* out, const HalfPair& g0, const HalfPair& g1,
                                                 const HalfPair& g2, const HalfPair& g3, const HalfPair& g4) {
@@ -809,10 +806,10 @@ class PairFrame {
       v4d row[2][3];  // [octants h..h+3][k]
       for (int h = 0; h < 2; ++h) {
         v4d r0, r1, r2, r3;
-        load4(r0, offset[4 * h]);
-        load4(r1, offset[4 * h + 1]);
-        load4(r2, offset[4 * h + 2]);
-        load4(r3, offset[4 * h + 3]);
+        load<4>(r0, offset[4 * h]);
+        load<4>(r1, offset[4 * h + 1]);
+        load<4>(r2, offset[4 * h + 2]);
+        load<4>(r3, offset[4 * h + 3]);
         const v4d t0 = __builtin_shufflevector(r0, r1, 0, 4, 2, 6), t1 = __builtin_shufflevector(r0, r1, 1, 5, 3, 7);
         const v4d t2 = __builtin_shufflevector(r2, r3, 0, 4, 2, 6), t3 = __builtin_shufflevector(r2, r3, 1, 5, 3, 7);
         row[h][0] = __builtin_shufflevector(t0, t2, 0, 1, 4, 5);
@@ -823,8 +820,8 @@ class PairFrame {
         if constexpr (W == 8) {
           store<8>(centre[k], __builtin_shufflevector(row[0][k], row[1][k], 0, 1, 2, 3, 4, 5, 6, 7));
         } else {
-          store4(centre[k], row[0][k]);
-          store4(centre[k] + 4, row[1][k]);
+          store<4>(centre[k], row[0][k]);
+          store<4>(centre[k] + 4, row[1][k]);
         }
       }
       filled_offsets_ |= bit;
