@@ -302,20 +302,40 @@ struct Portable {
 
   // Nearest first: order[0..) = the octants of `hits`, by key[octant]
   // ascending, ties in octant order (a stable sort). Returns how many.
+  // Each rank counts the keys of `hits` below key[j] and the equal ones of
+  // lower octants, kStoreLanes at a time with no branch: a lane's mask is -1
+  // where it counts, so the count is minus the masks' sum.
   [[gnu::always_inline]] static int nearest_order(const double* key, uint32_t hits, uint8_t* order) {
+    constexpr int kKeyChunks = 8 / kStoreLanes;
+    V k[kKeyChunks];
+    M in_hits[kKeyChunks];
+    int64_t lanes[8];
+    for (int i = 0; i < 8; ++i) lanes[i] = -int64_t((hits >> i) & 1u);
+    std::memcpy(in_hits, lanes, sizeof lanes);
+    for (int c = 0; c < kKeyChunks; ++c) load<kStoreLanes>(k[c], key + kStoreLanes * c);
     int m = 0;
     for (uint32_t rest = hits; rest != 0; rest &= rest - 1) {
       const int j = std::countr_zero(rest);
-      int rank = 0;
-      for (uint32_t other = hits; other != 0; other &= other - 1) {
-        const int i = std::countr_zero(other);
-        rank += key[i] < key[j] || (key[i] == key[j] && i < j);
-      }
+      const V kj = V{} + key[j];
+      M lower[kKeyChunks];  // the lanes of octants below j
+      std::memcpy(lower, kLowerLanes[size_t(j)].data(), sizeof lower);
+      M count{};
+      for (int c = 0; c < kKeyChunks; ++c) count += ((k[c] < kj) | ((k[c] == kj) & lower[c])) & in_hits[c];
+      int64_t rank = 0;
+      for (int i = 0; i < kStoreLanes; ++i) rank -= count[i];
       order[rank] = uint8_t(j);
       ++m;
     }
     return m;
   }
+
+  // kLowerLanes[j][i] = -1 where i < j, else 0.
+  static constexpr auto kLowerLanes = [] {
+    std::array<std::array<int64_t, 8>, 8> t{};
+    for (int j = 0; j < 8; ++j)
+      for (int i = 0; i < j; ++i) t[size_t(j)][size_t(i)] = -1;
+    return t;
+  }();
 };
 
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
