@@ -205,11 +205,8 @@ template <int W>
 [[gnu::always_inline]] inline void store(double* p, const Vec<W>& v) {
   *reinterpret_cast<typename Chunk<W>::mem*>(p) = v;
 }
-// Lanes the descent writes and the kernels read back soon after (a child's
-// projections, a level's radii) go in chunks of the kernel's load width: one
-// zmm store in the AVX-512 build, whose kernel loads 8 lanes at once (a load
-// spanning two narrower stores is not forwarded from them: it waits for them
-// to retire).
+// The pair frame's lane groups and centre transposes are 4 lanes wide in the
+// AVX builds (HalfPair below stands in for them in the portable build).
 using v4d = Vec<4>;
 
 // separated |= (|x| > r) lane by lane, for vectors of any width: |x| is x
@@ -230,8 +227,11 @@ template <int W>
 
 struct Portable {
   // Width of the generic code's vectors (radii, projections, offsets): the
-  // kernel's load width, and the ISA's register width in the AVX2 build (4)
-  // and here (2: SSE2, and NEON on ARM).
+  // ISA's register width, 2 here (SSE2, and NEON on ARM), 4 in the AVX2
+  // build, 8 in the AVX-512 build. Lanes the descent writes and the kernel
+  // reads back soon after (a child's projections, a level's radii) are thus
+  // stored as wide as the kernel loads them: a load spanning two narrower
+  // stores is not forwarded from them, it waits for them to retire.
   static constexpr int kStoreLanes = 2;
   using V = Vec<kStoreLanes>;
   using M = typename Chunk<kStoreLanes>::mask;

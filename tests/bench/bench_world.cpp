@@ -753,11 +753,4 @@ BENCHMARK(BM_PoolJob)
 
 // --kernel=portable|avx2|avx512: the box-test kernel build to measure
 // (kernel_option.h).
-int main(int argc, char** argv) {
-  if (!octbake::take_kernel_option(argc, argv, "bench_world")) return 2;
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 2;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
-}
+int main(int argc, char** argv) { return octbake::run_benchmarks(argc, argv, "bench_world"); }

@@ -4,10 +4,12 @@
 // can thus show what an AVX2-only or an ARM user gets.
 #pragma once
 
-#include "octbake/collide.h"
+#include <benchmark/benchmark.h>
 
 #include <cstdio>
 #include <string>
+
+#include "octbake/collide.h"
 
 namespace octbake {
 
@@ -34,6 +36,17 @@ inline bool take_kernel_option(int& argc, char** argv, const char* tool) {
   }
   argc = kept;
   return true;
+}
+
+// main() of a Google Benchmark program with --kernel: exit 2 on a bad
+// --kernel or an unknown argument.
+inline int run_benchmarks(int argc, char** argv, const char* tool) {
+  if (!take_kernel_option(argc, argv, tool)) return 2;
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 2;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
 }
 
 }  // namespace octbake
