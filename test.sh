@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Set up, build with warnings as errors, and run every test: once optimised,
 # once under AddressSanitizer + UndefinedBehaviorSanitizer, the thread-safety
-# test once under ThreadSanitizer; the runtime compiled for ARM; a short
+# test once under ThreadSanitizer; the runtime on ARM (emulated); a short
 # fuzzing pass; then a small shared-library pass.
 set -euo pipefail
 cd "$(dirname "$0")"
@@ -11,8 +11,9 @@ jobs=$(nproc)
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DOCTBAKE_WERROR=ON -DOCTBAKE_BUILD_TESTS=ON -DOCTBAKE_BENCH=ON >/dev/null
 cmake --build build -j"$jobs"
 ctest --test-dir build --output-on-failure -j"$jobs"
-# The runtime compiled for 64-bit ARM (compile only, -Werror): ARM CPUs run
-# the pair test's portable build.
+# The runtime on 64-bit ARM, the pair test's portable build: compiled with
+# -Werror, its unit tests under qemu-aarch64, and the bundled scenes' logs
+# byte-identical to x86-64's.
 ./scripts/check_aarch64.sh build
 cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-g -O1" -DOCTBAKE_WERROR=ON -DOCTBAKE_SANITIZE=ON -DOCTBAKE_BUILD_TESTS=ON >/dev/null
 cmake --build build-asan -j"$jobs"

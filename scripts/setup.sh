@@ -12,15 +12,21 @@ packages=(
   nlohmann-json3-dev libcli11-dev libstb-dev  # scene JSON, CLIs, PNG output
   libxxhash-dev                            # source-file hash (header-only use)
   clang libclang-rt-dev                    # libFuzzer targets (test.sh's fuzzing pass)
-  g++-aarch64-linux-gnu                    # the runtime compiled for ARM (test.sh, scripts/check_aarch64.sh)
+  # The runtime built, tested and run for ARM (test.sh, scripts/check_aarch64.sh):
+  # cross compiler, user-mode emulator, GoogleTest's sources, arm64 zstd.
+  g++-aarch64-linux-gnu qemu-user googletest libzstd-dev:arm64
   python3
 )
+sudo_cmd=(); [ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
+# Debian multiarch, for libzstd-dev:arm64.
+if ! dpkg --print-foreign-architectures | grep -qx arm64; then
+  "${sudo_cmd[@]}" dpkg --add-architecture arm64
+fi
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed' || missing+=("$p")
 done
 if ((${#missing[@]})); then
-  sudo_cmd=(); [ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
   "${sudo_cmd[@]}" apt-get update -qq
   DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq "${missing[@]}"
 fi
