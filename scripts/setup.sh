@@ -13,12 +13,12 @@ packages=(
   libxxhash-dev                            # source-file hash (header-only use)
   clang libclang-rt-dev                    # libFuzzer targets (test.sh's fuzzing pass)
   # The runtime built, tested and run for ARM (test.sh, scripts/check_aarch64.sh):
-  # cross compiler, user-mode emulator, GoogleTest's sources, arm64 zstd.
-  g++-aarch64-linux-gnu qemu-user googletest libzstd-dev:arm64
+  # cross compiler, user-mode emulator, GoogleTest's sources, arm64 zstd and assimp.
+  g++-aarch64-linux-gnu qemu-user googletest libzstd-dev:arm64 libassimp-dev:arm64
   python3
 )
 sudo_cmd=(); [ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
-# Debian multiarch, for libzstd-dev:arm64.
+# Debian multiarch, for the arm64 libraries above.
 if ! dpkg --print-foreign-architectures | grep -qx arm64; then
   "${sudo_cmd[@]}" dpkg --add-architecture arm64
 fi
