@@ -213,8 +213,12 @@ ContactEstimate estimate_contact(const OrientedBox& a, const OrientedBox& b) {
 // A job is open from parallel_for's start until every chunk is done; a
 // worker joins it only while it is open, so the caller never waits for a
 // worker that was not scheduled in time (it runs the chunks itself). Workers
-// spin a little before sleeping: detect() hands out several short jobs per
-// frame, and waking a sleeping thread costs more than most of them.
+// spin before sleeping: detect() hands out several short jobs per frame, and
+// waking a sleeping thread costs more than most of them. They spin 500 µs,
+// long enough to bridge an app's work between two frames of a 10k-object
+// scene (computing its poses), unless the pool has more threads than the
+// machine has cores: then spinners would take the cores from the threads
+// with work, and they spin only 50 µs.
 //
 // The chunks are split into one contiguous share per thread, which that
 // thread runs first; then it helps with the others' shares. Jobs over the
@@ -222,7 +226,7 @@ ContactEstimate estimate_contact(const OrientedBox& a, const OrientedBox& b) {
 // most of their data in the cache of the core that touched it last, instead
 // of pulling it from the other core's.
 struct ThreadPool::State {
-  static constexpr auto kSpin = std::chrono::microseconds(50);
+  static constexpr auto kSpin = std::chrono::microseconds(500), kSpinOversubscribed = std::chrono::microseconds(50);
 
   std::mutex mutex;
   std::condition_variable work, done;
@@ -243,16 +247,17 @@ struct ThreadPool::State {
   std::atomic<bool> open{false};
   std::atomic<int> inside{0};          // workers that joined the current job
   std::atomic<bool> stop{false};
+  std::chrono::microseconds spin_for = kSpin;
 
   static void pause() {
 #if defined(__x86_64__) || defined(__i386__)
     __builtin_ia32_pause();
 #endif
   }
-  // Spins until pred() or kSpin passed; returns pred().
+  // Spins until pred() or spin_for passed; returns pred().
   template <class Pred>
-  static bool spin(Pred pred) {
-    const auto until = std::chrono::steady_clock::now() + kSpin;
+  bool spin(Pred pred) const {
+    const auto until = std::chrono::steady_clock::now() + spin_for;
     for (;;) {
       for (int i = 0; i < 64; ++i) {
         if (pred()) return true;
@@ -301,6 +306,8 @@ struct ThreadPool::State {
 
 ThreadPool::ThreadPool(int threads) : state_(std::make_unique<State>()) {
   state_->threads = size_t(std::max(threads, 1));
+  const unsigned cores = std::thread::hardware_concurrency();  // 0: unknown
+  if (cores != 0 && state_->threads > cores) state_->spin_for = State::kSpinOversubscribed;
   state_->shares = std::make_unique<State::Share[]>(state_->threads);
   for (size_t i = 1; i < state_->threads; ++i) state_->workers.emplace_back([s = state_.get(), i] { s->worker(i); });
 }
@@ -337,7 +344,7 @@ void ThreadPool::parallel_for(size_t count, size_t grain, RangeTask task) {
   s.work.notify_all();
   s.run_chunks(0);
   const auto finished = [&] { return s.chunks_left.load() == 0; };
-  if (!State::spin(finished)) {
+  if (!s.spin(finished)) {
     std::unique_lock lock(s.mutex);
     s.done.wait(lock, finished);
   }
