@@ -5,11 +5,11 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>
-#include <thread>
 
 #include "bake.h"
 #include "cli.h"
 #include "for_scene.h"
+#include "octbake/collision_world.h"
 #include "octbake/version.h"
 
 int main(int argc, char** argv) {
@@ -18,7 +18,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", kLibraryVersion);
 
   BakeConfig config;
-  config.jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  config.jobs = usable_cores();
   std::vector<std::string> info_files;
   std::string occupancy = "surface", compress = "zstd:19";
   std::vector<std::string> occupancy_names;
@@ -41,7 +41,7 @@ int main(int argc, char** argv) {
           "zstd[:LEVEL]|none"))
       ->capture_default_str();
   app.add_option("-j,--jobs", config.jobs,
-                 "Threads: files baked in parallel, a large file's octants on the idle ones (default: all cores)")->check(CLI::Range(1, 4096));
+                 "Threads: files baked in parallel, a large file's octants on the idle ones (default: all cores the process may run on)")->check(CLI::Range(1, 4096));
   app.add_flag("--force", config.force, "Rebake even when the output is up to date");
   auto* info = app.add_option("--info", info_files, "Print what baked files hold and exit");
   app.add_flag("--json", json, "With --info: one JSON document on stdout instead of text")->needs(info);

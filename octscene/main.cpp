@@ -12,12 +12,12 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
-#include <thread>
 
 #include "alloc_counter.h"
 #include "budget.h"
 #include "cli_util.h"
 #include "gen.h"
+#include "octbake/collision_world.h"
 #include "octbake/version.h"
 #include "plan.h"
 #include "world_depth.h"
@@ -42,8 +42,8 @@ double peak_rss_mb() {
   return static_cast<double>(usage.ru_maxrss) / 1024.0;  // Linux: KiB
 }
 
-// All cores (hardware_concurrency may say 0: unknown).
-int default_threads() { return std::max(1u, std::thread::hardware_concurrency()); }
+// Every core the process may run on.
+int default_threads() { return usable_cores(); }
 
 // Options `run` and `plan` share: how the scene is run.
 struct SceneArgs {
@@ -73,7 +73,7 @@ void add_scene_options(CLI::App* cmd, SceneArgs& a) {
   cmd->add_option("--world-depth", a.world_depth, "WorldTree depth (default: the scene's world.depth)")
       ->check(CLI::Range(0, 10));
   a.options.threads = default_threads();
-  cmd->add_option("--threads", a.options.threads, "worker threads (results do not depend on it; default: all cores)")
+  cmd->add_option("--threads", a.options.threads, "worker threads (results do not depend on it; default: all cores the process may run on)")
       ->check(CLI::Range(1, 4096));
 }
 

@@ -12,10 +12,10 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
-#include <thread>
 
 #include "cli_util.h"
 #include "exact.h"
+#include "octbake/collision_world.h"
 #include "run.h"
 
 namespace octbake::scene {
@@ -428,8 +428,8 @@ int trade_main(int argc, char** argv) {
       ->check(CLI::Range(int64_t{0}, kMaxFrames));
   app.add_option("--max-depth", options.max_depth, "deepest depth tried (default: baked depth, at most 8)")
       ->check(CLI::Range(1, 12));
-  options.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  app.add_option("--threads", options.threads, "worker threads (scores do not depend on it; default: all cores)")
+  options.threads = usable_cores();
+  app.add_option("--threads", options.threads, "worker threads (scores do not depend on it; default: all cores the process may run on)")
       ->check(CLI::Range(1, 4096));
   app.add_option("--plot", plot_path, "write an SVG of cost against precision");
   app.add_option("--csv", csv_path, "write one CSV row per setting");

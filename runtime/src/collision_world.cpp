@@ -13,6 +13,10 @@
 #include <string>
 #include <thread>
 
+#if defined(__linux__)
+#include <sched.h>
+#endif
+
 #if __has_include("octbake/level_cache.h")
 #include "octbake/level_cache.h"
 #define OCTBAKE_HAS_LEVEL_CACHE 1
@@ -210,6 +214,15 @@ ContactEstimate estimate_contact(const OrientedBox& a, const OrientedBox& b) {
 
 // ---- ThreadPool ----
 
+int usable_cores() {
+#if defined(__linux__)
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (sched_getaffinity(0, sizeof set, &set) == 0 && CPU_COUNT(&set) > 0) return CPU_COUNT(&set);
+#endif
+  return int(std::max(1u, std::thread::hardware_concurrency()));  // 0: unknown
+}
+
 // A job is open from parallel_for's start until every chunk is done; a
 // worker joins it only while it is open, so the caller never waits for a
 // worker that was not scheduled in time (it runs the chunks itself). Workers
@@ -217,8 +230,9 @@ ContactEstimate estimate_contact(const OrientedBox& a, const OrientedBox& b) {
 // waking a sleeping thread costs more than most of them. They spin 500 µs,
 // long enough to bridge an app's work between two frames of a 10k-object
 // scene (computing its poses), unless the pool has more threads than the
-// machine has cores: then spinners would take the cores from the threads
-// with work, and they spin only 50 µs.
+// process has cores (usable_cores): then spinners would take the cores from
+// the threads with work, and they spin only 50 µs (libgomp likewise spins
+// far less when oversubscribed).
 //
 // The chunks are split into one contiguous share per thread, which that
 // thread runs first; then it helps with the others' shares. Jobs over the
@@ -306,8 +320,7 @@ struct ThreadPool::State {
 
 ThreadPool::ThreadPool(int threads) : state_(std::make_unique<State>()) {
   state_->threads = size_t(std::max(threads, 1));
-  const unsigned cores = std::thread::hardware_concurrency();  // 0: unknown
-  if (cores != 0 && state_->threads > cores) state_->spin_for = State::kSpinOversubscribed;
+  if (state_->threads > size_t(usable_cores())) state_->spin_for = State::kSpinOversubscribed;
   state_->shares = std::make_unique<State::Share[]>(state_->threads);
   for (size_t i = 1; i < state_->threads; ++i) state_->workers.emplace_back([s = state_.get(), i] { s->worker(i); });
 }

@@ -102,9 +102,15 @@ class OCTBAKE_API Executor {
   virtual void parallel_for(size_t count, size_t grain, RangeTask task) = 0;
 };
 
+// The cores this process may run on, at least 1: on Linux its CPU affinity
+// (taskset, a container's cpuset), which hardware_concurrency() ignores;
+// elsewhere hardware_concurrency(). The default thread count of octscene and
+// octbake, and what ThreadPool compares its threads with.
+OCTBAKE_API int usable_cores();
+
 // The built-in executor: `threads - 1` worker threads plus the caller. Used by
 // CollisionWorld when settings.threads > 1 and no executor is given. Workers
-// sleep between jobs; parallel_for does not allocate.
+// spin briefly, then sleep between jobs; parallel_for does not allocate.
 class OCTBAKE_API ThreadPool final : public Executor {
  public:
   explicit ThreadPool(int threads);

@@ -2,6 +2,9 @@
 // destroy / set_pose / set_camera / set_lod, every frame's contacts equal to
 // collide() on every pair of live objects at the depths the world chose, and
 // those depths equal to choose_depths over freshly computed pixel areas.
+#if defined(__linux__)
+#include <sched.h>
+#endif
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -248,6 +251,26 @@ TEST(CollisionWorldOracle, BitIdenticalAcrossRepeatsThreadCountsAndExecutors) {
   EXPECT_EQ(run(1, &backwards), reference);
   EXPECT_GT(backwards.calls, 0);
 }
+
+#if defined(__linux__)
+// The default thread count follows the process's CPU affinity (taskset, a
+// container's cpuset), not the machine's core count.
+TEST(CollisionWorldOracle, UsableCoresFollowTheCpuAffinity) {
+  cpu_set_t before;
+  ASSERT_EQ(sched_getaffinity(0, sizeof before, &before), 0);
+  EXPECT_EQ(usable_cores(), CPU_COUNT(&before));
+  int first = 0;
+  while (!CPU_ISSET(first, &before)) ++first;
+  cpu_set_t one;
+  CPU_ZERO(&one);
+  CPU_SET(first, &one);
+  ASSERT_EQ(sched_setaffinity(0, sizeof one, &one), 0);
+  const int pinned = usable_cores();
+  ASSERT_EQ(sched_setaffinity(0, sizeof before, &before), 0);
+  EXPECT_EQ(pinned, 1);
+  EXPECT_GE(usable_cores(), 1);
+}
+#endif
 
 TEST(CollisionWorldOracle, ThreadPoolCoversEveryItemOnce) {
   for (int threads : {1, 2, 3, 8}) {
