@@ -102,10 +102,12 @@ class OCTBAKE_API Executor {
   virtual void parallel_for(size_t count, size_t grain, RangeTask task) = 0;
 };
 
-// The cores this process may run on, at least 1: on Linux its CPU affinity
-// (taskset, a container's cpuset), which hardware_concurrency() ignores;
-// elsewhere hardware_concurrency(). The default thread count of octscene and
-// octbake, and what ThreadPool compares its threads with.
+// The cores the calling thread may run on, at least 1: on Linux its CPU
+// affinity (the process's, from taskset or a container's cpuset, unless the
+// app pinned the thread; threads it starts inherit it), which
+// hardware_concurrency() ignores; elsewhere hardware_concurrency(). The
+// default thread count of octscene and octbake, and what a ThreadPool
+// compares its threads with when it starts them.
 OCTBAKE_API int usable_cores();
 
 // The built-in executor: `threads - 1` worker threads plus the caller. Used by
