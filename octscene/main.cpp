@@ -42,9 +42,6 @@ double peak_rss_mb() {
   return static_cast<double>(usage.ru_maxrss) / 1024.0;  // Linux: KiB
 }
 
-// Every core the process may run on.
-int default_threads() { return usable_cores(); }
-
 // Options `run` and `plan` share: how the scene is run.
 struct SceneArgs {
   std::string baked;     // overrides the scene's "baked" when set
@@ -72,7 +69,7 @@ void add_scene_options(CLI::App* cmd, SceneArgs& a) {
   cmd->add_option("--baked", a.baked, "folder or pack of trees (default: the scene's \"baked\")");
   cmd->add_option("--world-depth", a.world_depth, "WorldTree depth (default: the scene's world.depth)")
       ->check(CLI::Range(0, 10));
-  a.options.threads = default_threads();
+  a.options.threads = usable_cores();
   cmd->add_option("--threads", a.options.threads, "worker threads (results do not depend on it; default: all cores the process may run on)")
       ->check(CLI::Range(1, 4096));
 }
