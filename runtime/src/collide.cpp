@@ -96,8 +96,8 @@ struct Relative {
   double s = 1, pad = 0;
 
   Relative(const PlacedTree& a, const PlacedTree& b) {
-    const Eigen::Matrix3d ra = a.pose.rotation.toRotationMatrix();
-    const Eigen::Matrix3d rb = b.pose.rotation.toRotationMatrix();
+    const Eigen::Matrix3d ra = rotation_matrix(a.pose.rotation);
+    const Eigen::Matrix3d rb = rotation_matrix(b.pose.rotation);
     s = b.pose.scale / a.pose.scale;
     // Subtract first: equal world offsets (1e7) cancel before any product.
     const Eigen::Vector3d dp = b.pose.position - a.pose.position;

@@ -11,6 +11,7 @@
 #include <limits>
 #include <mutex>
 #include <string>
+#include <system_error>
 #include <thread>
 
 #if defined(__linux__)
@@ -322,7 +323,14 @@ ThreadPool::ThreadPool(int threads) : state_(std::make_unique<State>()) {
   state_->threads = size_t(std::max(threads, 1));
   if (state_->threads > size_t(usable_cores())) state_->spin_for = State::kSpinOversubscribed;
   state_->shares = std::make_unique<State::Share[]>(state_->threads);
-  for (size_t i = 1; i < state_->threads; ++i) state_->workers.emplace_back([s = state_.get(), i] { s->worker(i); });
+  for (size_t i = 1; i < state_->threads; ++i) {
+    try {
+      state_->workers.emplace_back([s = state_.get(), i] { s->worker(i); });
+    } catch (const std::system_error&) {  // no thread to be had (a pid limit): run with those started
+      state_->threads = i;
+      break;
+    }
+  }
 }
 
 ThreadPool::~ThreadPool() {
@@ -433,6 +441,14 @@ void CollisionWorld::set_offset(uint32_t i) {
   Slot& s = slots_[i];
   roots_[i] = placed_root(tree_of(s), s.pose);
   s.offset = world_bounds(roots_[i].box);
+  // A box too large for a double (scale times bounds past 1.8e308) comes out
+  // with infinities and NaN (0 * inf in the rotation): it then spans every
+  // axis, so the object meets every other one, instead of a NaN box that the
+  // WorldTree would file in one corner cell and no overlap test would pass.
+  if (!s.offset.min.allFinite() || !s.offset.max.allFinite()) {
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    s.offset = {Eigen::Vector3d::Constant(-inf), Eigen::Vector3d::Constant(inf)};
+  }
   s.offset_reach = max_abs_coordinate(s.offset);
 }
 
@@ -1095,7 +1111,7 @@ bool CollisionWorld::ray_leaves(uint32_t i, const Eigen::Vector3d& origin, const
   // Start the local ray where it enters the world box: local coordinates
   // stay small even for objects 1e7 away.
   const Eigen::Vector3d start = origin + dir * t_box;
-  const Eigen::Matrix3d rt = s.pose.rotation.toRotationMatrix().transpose();
+  const Eigen::Matrix3d rt = rotation_matrix(s.pose.rotation).transpose();
   const Eigen::Vector3d o = rt * (start - s.pose.position) / s.pose.scale;
   const Eigen::Vector3d dl = rt * dir / s.pose.scale;
   const Aabb& root = tree.bounds();
@@ -1141,9 +1157,12 @@ Result<Eigen::Vector3d> ray_direction(const Eigen::Vector3d& origin, const Eigen
                                       double max_distance) {
   if (!origin.allFinite() || !direction.allFinite() || !(max_distance >= 0) || std::isnan(max_distance))
     return bad("ray_cast: non-finite origin or direction, or max_distance < 0");
-  const double len = direction.norm();
-  if (!(len > 0) || !std::isfinite(len)) return bad("ray_cast: zero direction");
-  return Eigen::Vector3d(direction / len);
+  const double largest = direction.cwiseAbs().maxCoeff();
+  if (!(largest > 0)) return bad("ray_cast: zero direction");
+  // A direction of 1e-170 or 1e160 is fine, but its squared length under- or
+  // overflows: such a one is scaled by its largest component first.
+  const Eigen::Vector3d scaled = largest > 1e-100 && largest < 1e100 ? direction : Eigen::Vector3d(direction / largest);
+  return Eigen::Vector3d(scaled / scaled.norm());
 }
 
 }  // namespace
@@ -1267,7 +1286,7 @@ bool bad_sphere(const Eigen::Vector3d& center, double radius) {
 bool CollisionWorld::box_leaves(uint32_t i, const Aabb& box) const {
   const Slot& s = slots_[i];
   // The query box in the object's local frame.
-  const Eigen::Matrix3d rt = s.pose.rotation.toRotationMatrix().transpose();
+  const Eigen::Matrix3d rt = rotation_matrix(s.pose.rotation).transpose();
   OrientedBox q = as_oriented(box);
   q.center = rt * (q.center - s.pose.position) / s.pose.scale;
   q.axes = rt;
@@ -1281,7 +1300,7 @@ bool CollisionWorld::box_leaves(uint32_t i, const Aabb& box) const {
 
 bool CollisionWorld::sphere_leaves(uint32_t i, const Eigen::Vector3d& center, double radius) const {
   const Slot& s = slots_[i];
-  const Eigen::Matrix3d rt = s.pose.rotation.toRotationMatrix().transpose();
+  const Eigen::Matrix3d rt = rotation_matrix(s.pose.rotation).transpose();
   const Eigen::Vector3d c = rt * (center - s.pose.position) / s.pose.scale;
   const double r = radius / s.pose.scale;
   const Aabb& root = tree_of(s).bounds();

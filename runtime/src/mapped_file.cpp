@@ -12,7 +12,9 @@
 namespace octbake::detail {
 
 Result<MappedFile> MappedFile::open(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  // O_NONBLOCK: opening a FIFO would otherwise wait for a writer; it is
+  // then refused below, like any file that is not regular.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
   if (fd < 0) {
     const int err = errno;
     return Error{err == ENOENT ? ErrorCode::not_found : ErrorCode::io_error, path + ": " + std::strerror(err)};

@@ -44,7 +44,7 @@ __m128d next_up(__m128d x) {
 OrientedBox place(const Aabb& local, const Pose& pose) {
   OrientedBox box;
   box.center = pose.apply(0.5 * (local.min + local.max));
-  box.axes = pose.rotation.toRotationMatrix();
+  box.axes = rotation_matrix(pose.rotation);
   box.half = (0.5 * pose.scale) * (local.max - local.min).cwiseAbs();
   return box;
 }

@@ -231,8 +231,8 @@ class OCTBAKE_API CollisionWorld {
   Status destroy(ObjectHandle h);
   bool alive(ObjectHandle h) const;
   size_t size() const { return live_; }
-  // Position, unit quaternion (|q| within 1e-6 of 1; stored normalized as
-  // given), uniform scale > 0. Cheap when only the position changed, and
+  // Position, unit quaternion (|q| within 1e-6 of 1; stored as given, placed
+  // as q / |q|), uniform scale > 0. Cheap when only the position changed, and
   // a no-op when nothing changed (bitwise): an app may set every pose every
   // frame.
   Status set_pose(ObjectHandle h, const Pose& pose);
