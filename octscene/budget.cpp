@@ -2,12 +2,15 @@
 
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
+
+#include "text_file.h"
 
 namespace octbake::scene {
 namespace {
 
 constexpr const char* kFormat = "octbake-startup-budget";
+// A budget is a few hundred bytes; anything near this is not one.
+constexpr size_t kMaxBudgetBytes = size_t{1} << 20;
 constexpr int kVersion = 1;
 
 // The counters by name, so parsing and listing share one table.
@@ -81,11 +84,9 @@ Result<StartupCounters> parse_budget(const std::string& text, const std::string&
 }
 
 Result<StartupCounters> read_budget(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return Error{ErrorCode::not_found, path + ": cannot read"};
-  std::stringstream text;
-  text << in.rdbuf();
-  return parse_budget(text.str(), path);
+  Result<std::string> text = read_text_file(path, kMaxBudgetBytes);
+  if (!text) return text.error();
+  return parse_budget(*text, path);
 }
 
 Result<bool> write_budget(const std::string& path, const StartupCounters& c) {

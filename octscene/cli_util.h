@@ -3,6 +3,7 @@
 #pragma once
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <map>
 #include <string>
@@ -28,7 +29,25 @@ std::map<std::string, Enum> names_of(const Enum (&values)[N]) {
   return m;
 }
 
-// Largest --frames / --frame accepted: run keeps one time per frame.
-constexpr int64_t kMaxFrames = 100'000'000;
+// CLI11's number validators let NaN through (every comparison with NaN is
+// false): options that take a real number also check this.
+inline const CLI::Validator kFiniteNumber(
+    [](std::string& text) -> std::string {
+      double value = 0;
+      if (!CLI::detail::lexical_cast(text, value)) return "not a number: " + text;
+      return std::isfinite(value) ? std::string() : "must be a finite number, got " + text;
+    },
+    "FINITE");
+
+// Whether everything printed to stdout reached it: a write that failed while
+// the buffer drained (a full disk, /dev/full) leaves only the error flag.
+inline bool stdout_written() { return std::fflush(stdout) == 0 && !std::ferror(stdout); }
+
+// --min-depth above --max-depth is a usage error wherever both are taken.
+inline bool depth_range_error(int min_depth, int max_depth) {
+  if (min_depth <= max_depth) return false;
+  std::fprintf(stderr, "octscene: error: --min-depth %d is above --max-depth %d\n", min_depth, max_depth);
+  return true;
+}
 
 }  // namespace octbake::scene

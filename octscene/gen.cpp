@@ -81,7 +81,7 @@ std::vector<CameraKey> flythrough(int keys, int64_t frames, double world_size) {
 
 }  // namespace
 
-Result<Scene> generate_scene(const GenOptions& options, ModelLibrary& library) {
+Result<std::monostate> check_gen_options(const GenOptions& options) {
   if (options.models.empty()) return Error{ErrorCode::invalid_argument, "--models: need at least one model"};
   if (options.static_count < 0 || options.moving_count < 0)
     return Error{ErrorCode::invalid_argument, "object counts must be >= 0"};
@@ -99,6 +99,11 @@ Result<Scene> generate_scene(const GenOptions& options, ModelLibrary& library) {
     return Error{ErrorCode::invalid_argument, "--camera-path: need at least 2 keys (or 0: a fixed camera)"};
   if (options.camera_keys >= 2 && options.frames < options.camera_keys - 1)
     return Error{ErrorCode::invalid_argument, "--camera-path: need at least one frame per key (--frames)"};
+  return std::monostate{};
+}
+
+Result<Scene> generate_scene(const GenOptions& options, ModelLibrary& library) {
+  if (auto st = check_gen_options(options); !st) return st.error();
 
   std::vector<Aabb> bounds;
   for (const std::string& m : options.models) {

@@ -2,6 +2,7 @@
 #pragma once
 #include <cstdint>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include "octbake/baked_file.h"
@@ -43,5 +44,9 @@ struct GenOptions {
 // `library` supplies the models' bounds (headers only). Scene::baked is left
 // empty: the caller decides how the file refers to the trees.
 Result<Scene> generate_scene(const GenOptions& options, ModelLibrary& library);
+
+// generate_scene's checks of the options alone (no trees needed): a bad
+// value or combination, named by its option.
+Result<std::monostate> check_gen_options(const GenOptions& options);
 
 }  // namespace octbake::scene

@@ -35,6 +35,10 @@ int fail(const std::string& message) {
   std::fprintf(stderr, "octscene: error: %s\n", message.c_str());
   return 1;
 }
+int usage_fail(const std::string& message) {
+  fail(message);
+  return 2;
+}
 
 double peak_rss_mb() {
   rusage usage{};
@@ -59,7 +63,7 @@ void add_scene_options(CLI::App* cmd, SceneArgs& a) {
   cmd->add_option("--max-depth", a.options.lod.max_depth, "deepest depth the LOD picks (default: each tree's baked depth)")
       ->check(CLI::Range(0, 12));
   cmd->add_option("--pixel-tolerance", a.options.lod.pixel_tolerance, "for --lod screen: pixels a leaf box may span")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+      ->check(CLI::PositiveNumber)->check(kFiniteNumber)->capture_default_str();
   cmd->add_option("--response", a.options.response, "none | thesis | separate (default: separate)")
       ->transform(CLI::CheckedTransformer(responses));
   cmd->add_option("--frames", a.options.frames, "override the scene's frame count")
@@ -245,6 +249,7 @@ int run_command(const RunArgs& args) {
   }
   if (!result) return fail(args.scene_path + ": " + result.error().message);
   print_summary(args, *loaded, *result);
+  if (!stdout_written()) return fail("stdout: write failed");
   if (budget) {
     const std::vector<std::string> excess = budget_excess(loaded->counters, *budget, args.budget_path);
     for (const std::string& message : excess) fail(message);
@@ -359,7 +364,7 @@ int plan_command(const PlanArgs& args) {
     j["scenes"] = scenes;
     std::printf("%s\n", j.dump(2).c_str());
   }
-  return std::fflush(stdout) == 0 ? 0 : fail("stdout: write failed");
+  return stdout_written() ? 0 : fail("stdout: write failed");
 }
 
 // ---- gen ----
@@ -371,13 +376,19 @@ struct GenArgs {
 };
 
 int gen_command(GenArgs& args) {
+  // A bad combination of values is a usage error, like a bad value.
+  if (auto st = check_gen_options(args.options); !st) return usage_fail(st.error().message);
   Result<ModelLibrary> library = ModelLibrary::open(args.baked);
   if (!library) return fail(args.baked + ": " + library.error().message);
   Result<Scene> scene = generate_scene(args.options, *library);
   if (!scene) return fail(scene.error().message);
   std::string text = write_scene(*scene, args.baked_as.empty() ? args.baked : args.baked_as);
+  // Extreme options (a world of 1e308) can give values `run` rejects, such
+  // as a far plane that overflows: read the scene back as `run` would.
+  if (Result<Scene> back = parse_scene(text, "."); !back)
+    return usage_fail("these options give a scene octscene run rejects: " + back.error().message);
   std::fwrite(text.data(), 1, text.size(), stdout);
-  return std::fflush(stdout) == 0 ? 0 : fail("stdout: write failed");
+  return stdout_written() ? 0 : fail("stdout: write failed");
 }
 
 // Subcommands that parse their own arguments (octscene/analysis).
@@ -432,21 +443,23 @@ int cli_main(int argc, char** argv) {
   gen_cmd->add_option("--baked", gen.baked, "folder or pack holding the models")->capture_default_str();
   gen_cmd->add_option("--baked-as", gen.baked_as, "\"baked\" as written in the scene (default: --baked)");
   gen_cmd->add_option("--world", gen.options.world_size, "edge of the cubic world box")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+      ->check(CLI::PositiveNumber)->check(kFiniteNumber)->capture_default_str();
   gen_cmd->add_option("--world-depth", gen.options.world_depth, "WorldTree depth")->check(CLI::Range(0, 10))->capture_default_str();
   gen_cmd->add_option("--speed", gen.options.speed, "top speed of moving objects")
-      ->check(CLI::NonNegativeNumber)->capture_default_str();
+      ->check(CLI::NonNegativeNumber)->check(kFiniteNumber)->capture_default_str();
   gen_cmd->add_option("--frames", gen.options.frames, "frame count")
       ->check(CLI::Range(int64_t{0}, kMaxFrames))->capture_default_str();
-  gen_cmd->add_option("--timestep", gen.options.timestep, "seconds per frame")->check(CLI::PositiveNumber);
+  gen_cmd->add_option("--timestep", gen.options.timestep, "seconds per frame")
+      ->check(CLI::PositiveNumber)->check(kFiniteNumber);
   std::vector<double> scale_range;
   gen_cmd->add_option("--scale-range", scale_range, "MIN,MAX: scales log-uniform in [MIN, MAX] (default 1,1)")
-      ->delimiter(',')->expected(2)->check(CLI::PositiveNumber);
+      ->delimiter(',')->expected(2)->check(CLI::PositiveNumber)->check(kFiniteNumber);
   gen_cmd->add_option("--rotated-share", gen.options.rotated_share, "share of objects with a random 3D orientation")
-      ->check(CLI::Range(0.0, 1.0));
-  gen_cmd->add_option("--spin-share", gen.options.spin_share, "share of objects that spin")->check(CLI::Range(0.0, 1.0));
+      ->check(CLI::Range(0.0, 1.0))->check(kFiniteNumber);
+  gen_cmd->add_option("--spin-share", gen.options.spin_share, "share of objects that spin")
+      ->check(CLI::Range(0.0, 1.0))->check(kFiniteNumber);
   gen_cmd->add_option("--spin-rate", gen.options.spin_rate, "top spin rate, radians per second")
-      ->check(CLI::NonNegativeNumber)->capture_default_str();
+      ->check(CLI::NonNegativeNumber)->check(kFiniteNumber)->capture_default_str();
   gen_cmd->add_option("--camera-path", gen.options.camera_keys, "KEYS: a camera path of KEYS keys through the world")
       ->check(CLI::Range(2, 10000));
 
@@ -468,13 +481,8 @@ int cli_main(int argc, char** argv) {
     for (CLI::App* sub : app.get_subcommands()) command += " " + sub->get_name();
     return parse_error_exit(app, e, command);
   }
-  for (const RunOptions* o : {&run.scene.options, &plan.scene.options}) {
-    if (o->lod.min_depth > o->lod.max_depth) {
-      std::fprintf(stderr, "octscene: error: --min-depth %d is above --max-depth %d\n", o->lod.min_depth,
-                   o->lod.max_depth);
-      return 2;
-    }
-  }
+  for (const RunOptions* o : {&run.scene.options, &plan.scene.options})
+    if (depth_range_error(o->lod.min_depth, o->lod.max_depth)) return 2;
   if (*run_cmd) return run_command(run);
   if (*plan_cmd) return plan_command(plan);
   if (scale_range.size() == 2) gen.options.scale_min = scale_range[0], gen.options.scale_max = scale_range[1];

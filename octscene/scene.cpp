@@ -3,11 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <initializer_list>
 #include <optional>
 #include <set>
 #include <nlohmann/json.hpp>
+
+#include "text_file.h"
 
 namespace octbake::scene {
 namespace {
@@ -15,6 +16,8 @@ namespace {
 using nlohmann::json;
 
 constexpr const char* kFormat = "octbake-scene/1";
+// Read whole before parsing: ~200 bytes an object, so ~5 million objects.
+constexpr size_t kMaxSceneBytes = size_t{1} << 30;
 constexpr double kUnitTolerance = 1e-6;
 constexpr int kMaxWorldDepth = 10;
 
@@ -235,7 +238,7 @@ Scene parse(const json& root, const std::string& scene_dir, StreamedObjects& str
   s.timestep = number(require(root, "", "timestep"), "timestep");
   if (!(s.timestep > 0)) fail("timestep", "must be > 0");
   s.frames = integer(require(root, "", "frames"), "frames");
-  if (s.frames < 0) fail("frames", "must be >= 0");
+  if (s.frames < 0 || s.frames > kMaxFrames) fail("frames", "must be in 0..100000000");
 
   const json& objects = require(root, "", "objects");
   if (!objects.is_array()) fail("objects", std::string("expected an array, got ") + type_name(objects));
@@ -397,14 +400,9 @@ Result<Scene> parse_scene(const std::string& json_text, const std::string& scene
 }
 
 Result<Scene> load_scene(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return Error{ErrorCode::not_found, path + ": cannot open"};
-  // Read straight into one string (a stringstream held the text twice).
-  std::string text;
-  char buffer[1 << 16];
-  while (in.read(buffer, sizeof buffer) || in.gcount() > 0) text.append(buffer, size_t(in.gcount()));
-  if (in.bad()) return Error{ErrorCode::io_error, path + ": read failed"};
-  Result<Scene> s = parse_scene(text, std::filesystem::path(path).parent_path().string());
+  Result<std::string> text = read_text_file(path, kMaxSceneBytes);
+  if (!text) return text.error();
+  Result<Scene> s = parse_scene(*text, std::filesystem::path(path).parent_path().string());
   if (!s) return Error{s.error().code, path + ": " + s.error().message};
   return s;
 }

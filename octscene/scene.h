@@ -11,6 +11,10 @@
 
 namespace octbake::scene {
 
+// Largest frame count of a scene, `--frames` and `--frame`: run keeps one
+// time per frame.
+constexpr int64_t kMaxFrames = 100'000'000;
+
 struct SceneObject {
   std::string name;
   std::string model;

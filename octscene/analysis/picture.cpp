@@ -290,7 +290,7 @@ int picture_main(int argc, char** argv) {
   sc->add_option("--lod", s.lod.policy, "fixed, thesis or screen")->transform(CLI::CheckedTransformer(policies));
   sc->add_option("--min-depth", s.lod.min_depth)->check(CLI::Range(0, 12));
   sc->add_option("--max-depth", s.lod.max_depth)->check(CLI::Range(0, 12));
-  sc->add_option("--pixel-tolerance", s.lod.pixel_tolerance)->check(CLI::PositiveNumber);
+  sc->add_option("--pixel-tolerance", s.lod.pixel_tolerance)->check(CLI::PositiveNumber)->check(kFiniteNumber);
   const auto responses = names_of(kResponses);
   sc->add_option("--response", s.response, "motion up to the frame")->transform(CLI::CheckedTransformer(responses));
   sc->add_option("--width", s.width, "picture width (default: viewport, at most 1280)")->check(CLI::Range(64, 8192));
@@ -303,7 +303,9 @@ int picture_main(int argc, char** argv) {
                                          : "octscene picture";
     return parse_error_exit(app, e, command);
   }
-  return tree->parsed() ? picture_tree(t) : picture_scene(s);
+  if (tree->parsed()) return picture_tree(t);
+  if (depth_range_error(s.lod.min_depth, s.lod.max_depth)) return 2;
+  return picture_scene(s);
 }
 
 }  // namespace octbake::scene

@@ -413,7 +413,8 @@ std::string csv_text(const TradeReport& report) {
 bool write_text(const std::string& path, const std::string& text) {
   std::ofstream out(path, std::ios::binary);
   out << text;
-  return static_cast<bool>(out);
+  out.close();  // the last bytes are written here, and may fail here
+  return !out.fail();
 }
 
 }  // namespace
@@ -482,6 +483,10 @@ int trade_main(int argc, char** argv) {
   }
   if (!plot_path.empty() && !write_text(plot_path, trade_svg(*report, std::filesystem::path(scene_path).filename().string()))) {
     std::fprintf(stderr, "octscene: error: %s: cannot write\n", plot_path.c_str());
+    return 1;
+  }
+  if (!stdout_written()) {
+    std::fprintf(stderr, "octscene: error: stdout: write failed\n");
     return 1;
   }
   return report->misses.empty() ? 0 : 1;

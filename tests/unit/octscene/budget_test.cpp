@@ -144,7 +144,7 @@ TEST(Budget, CommandPassesTheRecordedBudgetAndFailsOneByteLess) {
   // A missing budget file is an error naming it.
   c = run_command(run + "--budget " + (dir / "nope.json").string(), dir);
   EXPECT_EQ(c.status, 1);
-  EXPECT_EQ(c.err, "octscene: error: " + (dir / "nope.json").string() + ": cannot read\n");
+  EXPECT_EQ(c.err, "octscene: error: " + (dir / "nope.json").string() + ": cannot open: No such file or directory\n");
 }
 
 // The summary keeps deterministic counts apart from timings and says which

@@ -3,6 +3,8 @@
 // range-checked.
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
 #include <nlohmann/json.hpp>
 
 #include "helpers.h"
@@ -73,12 +75,87 @@ TEST(Cli, UsageErrorsAreOnePrefixedLine) {
            {"trade", "scene"},
            {"picture scene " + scene + " --out x.png --frame -1", "--frame"},
            {"picture scene " + scene + " --out x.png --frame 20", "--frame 20: past the scene's end"},
-           {"picture", "subcommand"}}) {
+           {"picture", "subcommand"},
+           // NaN passes CLI11's range checks (every comparison is false).
+           {"run " + scene + " --pixel-tolerance nan", "--pixel-tolerance"},
+           {"picture scene " + scene + " --out x.png --pixel-tolerance nan", "--pixel-tolerance"},
+           {"picture scene " + scene + " --out x.png --min-depth 5 --max-depth 2",
+            "--min-depth 5 is above --max-depth 2"},
+           {"gen --static 1 --moving 1 --seed 1 --models cube --baked " + (dir / "baked").string() + " --timestep nan", "--timestep"},
+           {"gen --static 1 --moving 1 --seed 1 --models cube --baked " + (dir / "baked").string() + " --world nan", "--world"},
+           {"gen --static 1 --moving 1 --seed 1 --models cube --baked " + (dir / "baked").string() + " --spin-share nan", "--spin-share"},
+           {"gen --static 1 --moving 1 --seed 1 --models cube --baked " + (dir / "baked").string() + " --scale-range 2,1", "--scale-range"},
+           {"gen --static 1 --moving 1 --seed 1 --models cube --baked " + (dir / "baked").string() + " --scale-range nan,1", "--scale-range"},
+           // Options whose scene `run` would refuse (a far plane of 1e308 * 10).
+           {"gen --static 1 --moving 1 --seed 1 --models cube --baked " + (dir / "baked").string() + " --world 1e308", "run rejects"},
+           {"gen --static 1 --moving 1 --seed 1 --models cube --baked " + (dir / "baked").string() + " --spin-share 1 --spin-rate 1e308",
+            "run rejects"}}) {
     Command r = run_command(kOctscene + " " + c.args, dir);
     EXPECT_EQ(r.status, 2) << c.args << "\n" << r.err;
     EXPECT_EQ(r.err.rfind("octscene: error: ", 0), 0u) << c.args << "\n" << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << c.args << "\n" << r.err;
     EXPECT_NE(r.err.find(c.names), std::string::npos) << c.args << "\n" << r.err;
+  }
+}
+
+// Inputs that are not files, or endless, are one error line, not a hang: a
+// FIFO where a model or the scene should be, /dev/zero as the scene or the
+// budget, and a scene's frame count beyond --frames' limit.
+TEST(Cli, DevicesFifosAndHugeFrameCountsAreErrorsNotHangs) {
+  const fs::path& dir = scratch_with_trees();
+  const fs::path fifo_dir = dir / "fifo_baked";
+  fs::create_directories(fifo_dir);
+  fs::remove(fifo_dir / "cube.oct");
+  ASSERT_EQ(::mkfifo((fifo_dir / "cube.oct").c_str(), 0600), 0);
+  json scene = json::parse(small_scene());
+  scene["baked"] = "fifo_baked";
+  write_text(dir / "fifo.json", scene.dump());
+  write_text(dir / "cli.json", small_scene());
+  scene = json::parse(small_scene());
+  scene["frames"] = int64_t{1} << 40;
+  write_text(dir / "many_frames.json", scene.dump());
+  fs::remove(dir / "scene.fifo");
+  ASSERT_EQ(::mkfifo((dir / "scene.fifo").c_str(), 0600), 0);
+  const std::string cli = (dir / "cli.json").string();
+  struct Case {
+    std::string args, names;
+  };
+  for (const Case& c : std::vector<Case>{
+           {"run " + (dir / "fifo.json").string(), "cube.oct: not a regular file"},
+           {"plan " + (dir / "fifo.json").string(), "cube.oct: not a regular file"},
+           {"run /dev/zero", "/dev/zero: not a regular file or a pipe"},
+           {"run " + cli + " --budget /dev/zero", "/dev/zero: not a regular file or a pipe"},
+           {"run " + dir.string(), "not a regular file or a pipe"},
+           {"run " + (dir / "many_frames.json").string(), "frames: must be in 0..100000000"},
+           {"plan " + (dir / "many_frames.json").string(), "frames: must be in 0..100000000"}}) {
+    // timeout: a regression hangs; it must not hang the suite.
+    Command r = run_command("timeout 60 " + kOctscene + " " + c.args, dir);
+    EXPECT_EQ(r.status, 1) << c.args << "\n" << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << c.args << "\n" << r.err;
+    EXPECT_NE(r.err.find(c.names), std::string::npos) << c.args << "\n" << r.err;
+  }
+  // A pipe is read like a file (`octscene run <(...)`).
+  Command piped = run_command("cat " + cli + " > " + (dir / "scene.fifo").string() + " & timeout 60 " + kOctscene +
+                                  " run " + (dir / "scene.fifo").string() + " --summary json",
+                              dir);
+  EXPECT_EQ(piped.status, 0) << piped.err;
+  EXPECT_NE(piped.out.find("\"collisions\""), std::string::npos) << piped.out;
+}
+
+// A write that fails on stdout or on --csv is an error, not exit 0.
+TEST(Cli, FullDiskOnStdoutOrCsvIsAnError) {
+  const fs::path& dir = scratch_with_trees();
+  write_text(dir / "cli.json", small_scene());
+  const std::string scene = (dir / "cli.json").string();
+  for (const std::string& args : {"run " + scene + " > /dev/full", "run " + scene + " --summary json > /dev/full",
+                                  "plan " + scene + " --json > /dev/full", "plan " + scene + " > /dev/full",
+                                  "trade " + scene + " --meshes " + dir.string() + " --frames 3 > /dev/full",
+                                  "trade " + scene + " --meshes " + dir.string() + " --frames 3 --csv /dev/full > /dev/null"}) {
+    const std::string line = kOctscene + " " + args + " 2>" + (dir / "full.err").string();
+    const int raw = std::system(line.c_str());
+    EXPECT_TRUE(WIFEXITED(raw) && WEXITSTATUS(raw) == 1) << args;
+    const std::string err = read_text(dir / "full.err");
+    EXPECT_NE(err.find("octscene: error: "), std::string::npos) << args << "\n" << err;
   }
 }
 

@@ -269,7 +269,25 @@ TEST(ForScene, ErrorsNameThePathAndTheReason) {
   EXPECT_EQ(c.status, 1);
   EXPECT_NE(c.err.find("octbake: error: " + scene + ": objects["), std::string::npos) << c.err;
   EXPECT_NE(c.err.find("no input file provides model \"tree\""), std::string::npos) << c.err;
-  EXPECT_FALSE(fs::exists(dir / "out" / "car.oct"));
+  // The scene cannot be planned, but the inputs that bake are still baked,
+  // to the full depth (-d), each with a note.
+  EXPECT_NE(c.err.find("octbake: note: " + (assets / "car.obj").string() + ": to depth 6: "), std::string::npos)
+      << c.err;
+  auto car = BakedFile::open((dir / "out" / "car.oct").string());
+  ASSERT_TRUE(car.ok()) << c.err;
+  EXPECT_EQ(car->trees()[0].depth, 6);
+  // The same when an input fails to bake, and (without -q) the run ends with
+  // one summary line counting both.
+  write_text(dir / "tree.obj", "garbage\n");
+  fs::remove_all(dir / "out");
+  c = run_command(kOctbake + " --for-scene " + scene + " -o " + (dir / "out").string() + " " +
+                      (assets / "car.obj").string() + " " + (dir / "tree.obj").string(),
+                  dir);
+  EXPECT_EQ(c.status, 1);
+  EXPECT_NE(c.err.find("octbake: error: " + (dir / "tree.obj").string() + ": "), std::string::npos) << c.err;
+  EXPECT_TRUE(fs::exists(dir / "out" / "car.oct")) << c.err;
+  EXPECT_FALSE(fs::exists(dir / "out" / "tree.oct")) << c.err;
+  EXPECT_NE(c.err.find("octbake: 1 baked, 0 up to date, 1 failed"), std::string::npos) << c.err;
   // A bad scene.
   write_text(dir / "bad.json", "{\"format\": 3}");
   c = run_command(kOctbake + " -q --for-scene " + (dir / "bad.json").string() + " " + (assets / "car.obj").string(), dir);
