@@ -10,6 +10,7 @@
 #include <mutex>
 #include <optional>
 #include <span>
+#include <system_error>
 #include <thread>
 #include <utility>
 
@@ -151,8 +152,12 @@ class Reporter {
   uint64_t triangles_ = 0;
 };
 
+// One line whatever the path holds: a newline or carriage return in a file
+// name (or in a reason quoting one) is written as \n or \r.
 std::string error_line(const std::string& path, const std::string& reason) {
-  return "octbake: error: " + path + ": " + reason;
+  std::string line = "octbake: error: ";
+  for (char ch : path + ": " + reason) line += ch == '\n' ? "\\n" : ch == '\r' ? "\\r" : std::string(1, ch);
+  return line;
 }
 
 // Runs fn(i) for every i in [0, n) on the calling thread and as many more as
@@ -168,11 +173,17 @@ void parallel_for(size_t n, ThreadBudget& budget, const Fn& fn) {
   };
   const bool held = budget.try_acquire();  // the calling thread's own slot
   std::vector<std::jthread> pool;
-  for (size_t t = 1; t < n && budget.try_acquire(); ++t)
-    pool.emplace_back([&] {
-      worker();
+  for (size_t t = 1; t < n && budget.try_acquire(); ++t) {
+    try {
+      pool.emplace_back([&] {
+        worker();
+        budget.release();
+      });
+    } catch (const std::system_error&) {  // no thread to be had (a pid limit): go on with those running
       budget.release();
-    });
+      break;
+    }
+  }
   worker();
   if (held) budget.release();
 }
@@ -241,8 +252,10 @@ Result<TreeToEncode> bake_tree(const Input& in, size_t i, const BakeOptions& opt
   return t;
 }
 
-// A Make-syntax rule "OUTPUT: INPUT...": spaces, '#' and '\' escaped with
-// a backslash, '$' doubled; both Make and Ninja read it.
+// A Make-syntax rule "OUTPUT: INPUT...": spaces and '#' escaped with a
+// backslash, '$' doubled; both Make and Ninja read it. Make cannot name a
+// file with a newline, and reads a backslash before an escaped space as
+// an escape of its own: depfile_problem() refuses such paths first.
 std::string depfile_text(const std::string& output, const std::vector<std::string>& inputs) {
   auto escape = [](const std::string& path) {
     std::string e;
@@ -256,6 +269,15 @@ std::string depfile_text(const std::string& output, const std::vector<std::strin
   std::string text = escape(output) + ":";
   for (const std::string& in : inputs) text += " \\\n " + escape(in);
   return text + "\n";
+}
+
+// Why no depfile can name these paths, if it cannot.
+std::optional<std::string> depfile_problem(const std::string& output, const std::vector<std::string>& inputs) {
+  auto bad = [](const std::string& path) { return path.find_first_of("\n\r\\") != std::string::npos; };
+  if (bad(output)) return "cannot name " + output + " in a depfile: it holds a newline or a backslash";
+  for (const std::string& in : inputs)
+    if (bad(in)) return "cannot name " + in + " in a depfile: it holds a newline or a backslash";
+  return std::nullopt;
 }
 
 std::optional<std::string> make_dir(const std::string& dir) {
@@ -389,6 +411,7 @@ class Baker {
       std::error_code ec;
       fs::create_directories(fs::absolute(config_.depfile, ec).parent_path(), ec);
       const std::string output = fs::absolute(in.output, ec).lexically_normal().string();
+      if (auto problem = depfile_problem(ec ? in.output : output, files_read)) return fail(i, *problem);
       const std::string text = depfile_text(ec ? in.output : output, files_read);
       auto dep = write_file_atomic(config_.depfile, {reinterpret_cast<const uint8_t*>(text.data()), text.size()});
       if (!dep) return fail(i, "cannot write depfile " + config_.depfile + ": " + dep.error().message);
@@ -438,6 +461,13 @@ class Baker {
     for (Input& in : inputs_)
       if (in.tree) trees.push_back(std::move(*in.tree));
     if (trees.empty()) return;  // keep the old pack: nothing to put in it
+    // A pack is one file: rewritten without a failed input's tree, it would
+    // lose the tree the old pack holds. Nothing already made is lost.
+    std::error_code ec;
+    if (const size_t failed = inputs_.size() - trees.size(); failed > 0 && fs::exists(config_.pack, ec))
+      return reporter_->extra_error(error_line(
+          config_.pack, "not rewritten, the old pack is kept: " + std::to_string(failed) + " of " +
+                            std::to_string(inputs_.size()) + " inputs failed (fix them or leave them out)"));
     std::vector<uint8_t> bytes;
     try {  // zstd out of memory or threads: one error line, the old pack kept
       bytes = encode_with(trees, threads_, /*held=*/false);

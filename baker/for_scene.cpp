@@ -3,6 +3,7 @@
 #include <stdlib.h>
 
 #include <algorithm>
+#include <chrono>
 #include <filesystem>
 #include <map>
 #include <set>
@@ -68,7 +69,6 @@ int bake_for_scene(const std::string& scene_path, const BakeConfig& config, std:
     status = error(scene_path, "objects[" + std::to_string(i) + "].model: no input file provides model \"" + model +
                                    "\" (a file named " + model + ".<ext>)");
   }
-  if (status != 0) return status;
 
   // 1. Full trees, only to plan with.
   TempDir temp;
@@ -80,17 +80,48 @@ int bake_for_scene(const std::string& scene_path, const BakeConfig& config, std:
   full.force = true;
   full.progress = false;
   full.export_obj_dir.clear();
-  if (run_bake(full, err).failed != 0) return 1;  // each failure already printed
+  full.summary = false;
+  const auto start = std::chrono::steady_clock::now();
+  BakeSummary total;  // of the bakes into config.out_dir, and the failures
+  auto bake_into_out = [&](BakeConfig part) {
+    part.summary = false;
+    const BakeSummary s = run_bake(part, err);
+    total.baked += s.baked, total.up_to_date += s.up_to_date, total.failed += s.failed;
+    total.triangles += s.triangles;
+  };
+  auto finish = [&](int status) {
+    if (config.summary) {
+      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      std::fprintf(err, "%s\n", summary_line(total.baked, total.up_to_date, total.failed, seconds, total.triangles).c_str());
+    }
+    return status;
+  };
+  const BakeSummary planning = run_bake(full, err);  // each failure printed here, once
+  total.failed = planning.failed;
+  if (planning.failed != 0 || status != 0) {
+    // The scene cannot be run without every model, so nothing is planned;
+    // the files that did bake are still baked, to the full depth.
+    BakeConfig rest = config;
+    rest.inputs.clear();
+    for (const std::string& path : full.inputs) {
+      if (!fs::exists(fs::path(full.out_dir) / (fs::path(path).stem().string() + ".oct"))) continue;
+      rest.inputs.push_back(path);
+      std::fprintf(err, "octbake: note: %s: to depth %d: %s cannot be planned without every model\n", path.c_str(),
+                   config.options.depth, scene_path.c_str());
+    }
+    if (!rest.inputs.empty()) bake_into_out(rest);
+    return finish(1);
+  }
 
   // 2. The scene's run on them: the depth each model needs.
   scene->baked = full.out_dir;
   Result<ModelLibrary> library = ModelLibrary::open(scene->baked);
-  if (!library) return error(scene_path, library.error().message);
+  if (!library) return finish(error(scene_path, library.error().message));
   const scene::RunOptions options;  // octscene run's defaults
   Result<scene::SceneModels> models = scene::load_scene_models(*scene, *library, options.lod.max_depth);
-  if (!models) return error(scene_path, models.error().message);
+  if (!models) return finish(error(scene_path, models.error().message));
   Result<scene::ScenePlan> plan = scene::plan_scene(*scene, *models, options);
-  if (!plan) return error(scene_path, plan.error().message);
+  if (!plan) return finish(error(scene_path, plan.error().message));
 
   // 3. Each file at its depth, in groups of equal depth.
   std::map<int, std::vector<std::string>> inputs_at_depth;
@@ -109,9 +140,9 @@ int bake_for_scene(const std::string& scene_path, const BakeConfig& config, std:
     BakeConfig reduced = config;
     reduced.inputs = paths;
     reduced.options.depth = depth;
-    if (run_bake(reduced, err).failed != 0) status = 1;
+    bake_into_out(reduced);
   }
-  return status;
+  return finish(total.failed == 0 ? status : 1);
 }
 
 }  // namespace octbake

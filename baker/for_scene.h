@@ -6,7 +6,9 @@
 // How: the chosen files are baked to config.options.depth into a temporary
 // folder, the scene is run on those trees (octscene_driver's plan_scene),
 // then each file is baked into config.out_dir at its planned depth (at least
-// 1). Levels 1..d of a tree do not depend on the depth it was baked to
+// 1). When a file fails to bake or a model has no file, the scene cannot be
+// planned: the files that bake are then baked to config.options.depth, with
+// a note each. Levels 1..d of a tree do not depend on the depth it was baked to
 // (surface and vertices occupancy), so a run of the scene on the reduced
 // files gives the same log as on full ones.
 //

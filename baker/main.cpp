@@ -80,8 +80,8 @@ int main(int argc, char** argv) {
   config.options.occupancy = *parse_occupancy(occupancy);
   std::tie(config.options.compression, config.options.compression_level) = *parse_compression(compress);
   config.progress = !quiet && ::isatty(STDERR_FILENO);
-  if (!for_scene.empty()) return bake_for_scene(for_scene, config, stderr);
   config.summary = !quiet;
+  if (!for_scene.empty()) return bake_for_scene(for_scene, config, stderr);
   const BakeSummary summary = run_bake(config, stderr);
   return summary.failed == 0 ? 0 : 1;
 }

@@ -61,11 +61,15 @@ std::string hex_of(XXH128_hash_t hash) {
 }  // namespace
 
 Result<std::string> hash_file(const std::string& path) {
-  Fd fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC));
+  // O_NONBLOCK: a FIFO would block the open until a writer came; it is then
+  // refused with every other file that is not regular (a device such as
+  // /dev/zero would be read forever).
+  Fd fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK));
   if (fd.get() < 0) return errno_error("cannot open: ");
   struct stat st {};
   if (::fstat(fd.get(), &st) != 0) return errno_error("cannot stat: ");
   if (S_ISDIR(st.st_mode)) return Error{ErrorCode::io_error, "is a directory, not a mesh file"};
+  if (!S_ISREG(st.st_mode)) return Error{ErrorCode::io_error, "not a regular file"};
 
   XXH3_state_t* state = XXH3_createState();
   if (state == nullptr || XXH3_128bits_reset(state) == XXH_ERROR) {

@@ -1,6 +1,7 @@
 // `octbake` on real meshes nobody here made (package assimp-testmodels), and
 // on a batch mixing good inputs with every kind of bad one.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include "cli_test_util.h"
 #include "import.h"
@@ -86,6 +87,10 @@ TEST(CliModels, BadInputsFailOneLineEachAndGoodOnesStillBake) {
   for (const char* name : {"points_only.obj", "lines.obj", "nan.obj", "zero_bytes.obj", "folder.obj", "missing.obj"})
     bad.push_back(t / (std::string("bad/") + name));
   bad.push_back(kModels + "PLY/points.ply");
+  // Not regular files: a FIFO blocked the open and /dev/zero was read forever.
+  ASSERT_EQ(::mkfifo((t / "bad/fifo.obj").c_str(), 0600), 0);
+  bad.push_back(t / "bad/fifo.obj");
+  bad.push_back("/dev/zero");
 
   // Interleave good and bad, so ordering and isolation both show.
   std::vector<std::string> args = {"-q", "-j2", "-d", "5", "-o", t / "out"}, order;

@@ -369,5 +369,48 @@ TEST(CliPack, OneFileWithEveryTreeLoadableByName) {
   }
 }
 
+// A newline in a file name: its error is still one line (the newline
+// written as \n), and no depfile names it (Make cannot).
+TEST(CliNames, NewlinesInNamesKeepOneLineAndStayOutOfDepfiles) {
+  TempDir t;
+  const std::string broken = t / "bad\nname.obj", good = t / "good\nname.obj";
+  write_text(broken, "garbage\n");
+  write_text(good, test::random_obj(3, 20, 0.3));
+  RunResult r = run_octbake({"-q", "-o", t / "out", broken});
+  EXPECT_EQ(r.exit_code, 1);
+  ASSERT_EQ(r.err_lines().size(), 1u) << r.err;
+  EXPECT_EQ(r.err_lines()[0].rfind("octbake: error: " + t.path().string() + "/bad\\nname.obj: ", 0), 0u) << r.err;
+  r = run_octbake({"-q", "-o", t / "out", "--depfile", t / "d.d", good});
+  EXPECT_EQ(r.exit_code, 1);
+  ASSERT_EQ(r.err_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.err.find("in a depfile: it holds a newline or a backslash"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(t / "d.d"));
+}
+
+// Rebaking a pack with a broken input keeps the old pack whole (it holds that
+// input's last good tree); with no old pack, the inputs that bake are packed.
+TEST(CliPack, AFailedInputKeepsTheOldPack) {
+  TempDir t;
+  const auto inputs = random_inputs(t, 3, 300);
+  const std::string pack = t / "all.oct";
+  ASSERT_EQ(run_octbake(with({"-q", "-d", "4", "--pack", pack}, inputs)).exit_code, 0);
+  const std::vector<uint8_t> before = read_bytes(pack);
+  write_text(inputs[1], "garbage\n");
+  RunResult r = run_octbake(with({"-q", "-d", "4", "--pack", pack}, inputs));
+  EXPECT_EQ(r.exit_code, 1);
+  const auto lines = r.err_lines();
+  ASSERT_EQ(lines.size(), 2u) << r.err;
+  EXPECT_EQ(lines[0].rfind("octbake: error: " + inputs[1] + ": ", 0), 0u) << r.err;
+  EXPECT_EQ(lines[1].rfind("octbake: error: " + pack + ": not rewritten, the old pack is kept: 1 of 3", 0), 0u)
+      << r.err;
+  EXPECT_EQ(read_bytes(pack), before);
+  std::filesystem::remove(pack);
+  r = run_octbake(with({"-q", "-d", "4", "--pack", pack}, inputs));
+  EXPECT_EQ(r.exit_code, 1);
+  auto packed = BakedFile::open(pack);
+  ASSERT_TRUE(packed.ok()) << r.err;
+  EXPECT_EQ(packed->trees().size(), 2u);
+}
+
 }  // namespace
 }  // namespace octbake
