@@ -63,6 +63,7 @@ class TreeBuilder {
   TreeBuilder(const std::vector<Prim>& prims, const Aabb& bounds, int depth, double pad, const Interior* interior)
       : prims_(prims), bounds_(bounds), depth_(depth), pad_(pad), interior_(interior), scratch_(depth) {
     for (int d = 0; d <= depth; ++d) size_[d] = (bounds.max - bounds.min) / double(uint64_t{1} << d);
+    for (int i = 0; i < 3; ++i) flat_[i] = !(bounds.max[i] > bounds.min[i]);
   }
 
   // masks[d] for d < stop of the whole tree; the boxes of depth `stop`, in
@@ -134,7 +135,7 @@ class TreeBuilder {
         const Prim& p = prims_[t];
         uint32_t half_ok[3];
         for (int i = 0; i < 3; ++i)
-          half_ok[i] = (p.lo[i] <= low_hi[i] + pad_ ? 1u : 0u) | (p.hi[i] >= high_lo[i] - pad_ ? 2u : 0u);
+          half_ok[i] = (p.lo[i] <= low_hi[i] + pad_ ? 1u : 0u) | (p.hi[i] >= high_lo[i] - pad_ && !flat_[i] ? 2u : 0u);
         for (uint32_t j = 0; j < 8; ++j) {
           if (!(half_ok[0] >> (j & 1u) & 1u) || !(half_ok[1] >> ((j >> 1) & 1u) & 1u) ||
               !(half_ok[2] >> ((j >> 2) & 1u) & 1u))
@@ -163,6 +164,10 @@ class TreeBuilder {
   }
 
   const std::vector<Prim>& prims_;
+  // Axes on which the bounds have no extent: there both halves of a box are
+  // the same box, so only the low one is marked (a point mesh would
+  // otherwise fill all 8^d boxes of its depth, a flat one 2^d per column).
+  std::array<bool, 3> flat_{};
   Aabb bounds_;
   int depth_;
   double pad_;
