@@ -25,10 +25,14 @@ int main(int argc, char** argv) {
   for (Occupancy mode : kOccupancies) occupancy_names.push_back(to_string(mode));
   bool quiet = false, json = false;
 
+  // A path option given as '' is an error, not a silent default ("none" is the option left out).
+  const CLI::Validator non_empty([](std::string& v) { return v.empty() ? std::string("an empty path") : std::string(); },
+                                 "PATH");
   app.add_option("FILE", config.inputs, "Mesh files to bake");
   auto* out = app.add_option("-o,--out", config.out_dir, "One baked file per input: DIR/<stem>.oct")
+                  ->check(non_empty)
                   ->capture_default_str();
-  app.add_option("--pack", config.pack, "All inputs into this one pack file instead")->excludes(out);
+  app.add_option("--pack", config.pack, "All inputs into this one pack file instead")->check(non_empty)->excludes(out);
   app.add_option("-d,--depth", config.options.depth, "Deepest level baked, 1..12")
       ->check(CLI::Range(1, 12))
       ->capture_default_str();
@@ -45,11 +49,14 @@ int main(int argc, char** argv) {
   app.add_flag("--force", config.force, "Rebake even when the output is up to date");
   auto* info = app.add_option("--info", info_files, "Print what baked files hold and exit");
   app.add_flag("--json", json, "With --info: one JSON document on stdout instead of text")->needs(info);
-  app.add_option("--export-obj", config.export_obj_dir, "Also write each tree's boxes per depth as DIR/<stem>_d<depth>.obj");
+  app.add_option("--export-obj", config.export_obj_dir, "Also write each tree's boxes per depth as DIR/<stem>_d<depth>.obj")
+      ->check(non_empty);
   app.add_flag("-q,--quiet", quiet, "No progress display and no summary line");
   std::string for_scene;
-  app.add_option("--for-scene", for_scene, "Bake only the FILEs whose model SCENE.json names, each to the depth its run needs");
-  app.add_option("--depfile", config.depfile, "Also write FILE: a Make rule OUTPUT: every file the import read (one input; implies --force)");
+  app.add_option("--for-scene", for_scene, "Bake only the FILEs whose model SCENE.json names, each to the depth its run needs")
+      ->check(non_empty);
+  app.add_option("--depfile", config.depfile, "Also write FILE: a Make rule OUTPUT: every file the import read (one input; implies --force)")
+      ->check(non_empty);
 
   try {
     app.parse(argc, argv);

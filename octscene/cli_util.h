@@ -43,6 +43,11 @@ inline const CLI::Validator kFiniteNumber(
 // the buffer drained (a full disk, /dev/full) leaves only the error flag.
 inline bool stdout_written() { return std::fflush(stdout) == 0 && !std::ferror(stdout); }
 
+// A path option given as '' is an error, not silently "no file" (the
+// defaults that mean "none" are the option left out).
+inline const CLI::Validator kNonEmptyPath(
+    [](std::string& text) { return text.empty() ? std::string("an empty path") : std::string(); }, "PATH");
+
 // --min-depth above --max-depth is a usage error wherever both are taken.
 inline bool depth_range_error(int min_depth, int max_depth) {
   if (min_depth <= max_depth) return false;

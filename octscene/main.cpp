@@ -70,7 +70,7 @@ void add_scene_options(CLI::App* cmd, SceneArgs& a) {
       ->check(CLI::Range(int64_t{0}, kMaxFrames));
   cmd->add_flag("--areas-every-frame", a.options.areas_every_frame,
                 "recompute pixel areas every frame, not only when an object changes leaf set");
-  cmd->add_option("--baked", a.baked, "folder or pack of trees (default: the scene's \"baked\")");
+  cmd->add_option("--baked", a.baked, "folder or pack of trees (default: the scene's \"baked\")")->check(kNonEmptyPath);
   cmd->add_option("--world-depth", a.world_depth, "WorldTree depth (default: the scene's world.depth)")
       ->check(CLI::Range(0, 10));
   a.options.threads = usable_cores();
@@ -420,12 +420,13 @@ int cli_main(int argc, char** argv) {
   CLI::App* run_cmd = app.add_subcommand("run", "run a scene and report its collisions");
   run_cmd->add_option("scene", run.scene_path, "scene file (JSON)")->required();
   add_scene_options(run_cmd, run.scene);
-  run_cmd->add_option("--log", run.log_path, "collision log (CSV)");
+  run_cmd->add_option("--log", run.log_path, "collision log (CSV)")->check(kNonEmptyPath);
   run_cmd->add_option("--summary", run.summary, "table | json")
       ->check(CLI::IsMember({"table", "json"}))->capture_default_str();
   run_cmd->add_option("--budget", run.budget_path,
-                      "start-up budget (JSON): exit 1 when a start-up counter exceeds it");
-  run_cmd->add_option("--write-budget", run.write_budget_path, "record this run's start-up counters as a budget");
+                      "start-up budget (JSON): exit 1 when a start-up counter exceeds it")->check(kNonEmptyPath);
+  run_cmd->add_option("--write-budget", run.write_budget_path, "record this run's start-up counters as a budget")
+      ->check(kNonEmptyPath);
 
   PlanArgs plan;
   CLI::App* plan_cmd =
@@ -440,8 +441,9 @@ int cli_main(int argc, char** argv) {
   gen_cmd->add_option("--moving", gen.options.moving_count, "moving objects")->required()->check(CLI::NonNegativeNumber);
   gen_cmd->add_option("--seed", gen.options.seed, "random seed")->required();
   gen_cmd->add_option("--models", gen.options.models, "model names, comma separated")->required()->delimiter(',');
-  gen_cmd->add_option("--baked", gen.baked, "folder or pack holding the models")->capture_default_str();
-  gen_cmd->add_option("--baked-as", gen.baked_as, "\"baked\" as written in the scene (default: --baked)");
+  gen_cmd->add_option("--baked", gen.baked, "folder or pack holding the models")->check(kNonEmptyPath)->capture_default_str();
+  gen_cmd->add_option("--baked-as", gen.baked_as, "\"baked\" as written in the scene (default: --baked)")
+      ->check(kNonEmptyPath);
   gen_cmd->add_option("--world", gen.options.world_size, "edge of the cubic world box")
       ->check(CLI::PositiveNumber)->check(kFiniteNumber)->capture_default_str();
   gen_cmd->add_option("--world-depth", gen.options.world_depth, "WorldTree depth")->check(CLI::Range(0, 10))->capture_default_str();

@@ -269,11 +269,11 @@ int picture_main(int argc, char** argv) {
   TreeArgs t;
   CLI::App* tree = app.add_subcommand("tree", "a tree's occupied boxes over its mesh, one panel per depth");
   tree->add_option("file", t.file, "a baked .oct file (or use --baked/--model)");
-  tree->add_option("--baked", t.baked, "a folder of .oct files or a pack");
+  tree->add_option("--baked", t.baked, "a folder of .oct files or a pack")->check(kNonEmptyPath);
   tree->add_option("--model", t.model, "tree name (in FILE or --baked)");
   tree->add_option("--mesh", t.mesh, "the source mesh (default: --meshes DIR/<model>.<ext>)");
-  tree->add_option("--meshes", t.meshes, "folder to look for the mesh in");
-  tree->add_option("--out", t.out, "PNG to write")->required();
+  tree->add_option("--meshes", t.meshes, "folder to look for the mesh in")->check(kNonEmptyPath);
+  tree->add_option("--out", t.out, "PNG to write")->required()->check(kNonEmptyPath);
   tree->add_option("--depth", t.depths, "depths to draw, e.g. 1,2,3,4 (default: all)")->delimiter(',');
   tree->add_option("--size", t.size, "pixels per panel side")->check(CLI::Range(64, 4096));
   const std::map<std::string, TreeView> views{
@@ -284,8 +284,8 @@ int picture_main(int argc, char** argv) {
   CLI::App* sc = app.add_subcommand("scene", "a scene frame from its camera, objects tinted by LOD depth");
   sc->add_option("scene", s.scene, "scene JSON")->required();
   sc->add_option("--frame", s.frame, "frame to draw (0 .. the scene's frames - 1)")->check(CLI::Range(int64_t{0}, kMaxFrames));
-  sc->add_option("--out", s.out, "PNG to write")->required();
-  sc->add_option("--meshes", s.meshes, "folder of the source meshes");
+  sc->add_option("--out", s.out, "PNG to write")->required()->check(kNonEmptyPath);
+  sc->add_option("--meshes", s.meshes, "folder of the source meshes")->check(kNonEmptyPath);
   const auto policies = names_of(kLodPolicies);
   sc->add_option("--lod", s.lod.policy, "fixed, thesis or screen")->transform(CLI::CheckedTransformer(policies));
   sc->add_option("--min-depth", s.lod.min_depth)->check(CLI::Range(0, 12));

@@ -424,7 +424,8 @@ int trade_main(int argc, char** argv) {
   std::string scene_path, plot_path, csv_path;
   TradeOptions options;
   app.add_option("scene", scene_path, "scene JSON")->required();
-  app.add_option("--meshes", options.meshes, "folder of the source meshes (model x -> DIR/x.obj, .ply, ...)");
+  app.add_option("--meshes", options.meshes, "folder of the source meshes (model x -> DIR/x.obj, .ply, ...)")
+      ->check(kNonEmptyPath);
   app.add_option("--frames", options.frames, "frames to run (default: the scene's)")
       ->check(CLI::Range(int64_t{0}, kMaxFrames));
   app.add_option("--max-depth", options.max_depth, "deepest depth tried (default: baked depth, at most 8)")
@@ -432,8 +433,8 @@ int trade_main(int argc, char** argv) {
   options.threads = usable_cores();
   app.add_option("--threads", options.threads, "worker threads (scores do not depend on it; default: all cores the process may run on)")
       ->check(CLI::Range(1, 4096));
-  app.add_option("--plot", plot_path, "write an SVG of cost against precision");
-  app.add_option("--csv", csv_path, "write one CSV row per setting");
+  app.add_option("--plot", plot_path, "write an SVG of cost against precision")->check(kNonEmptyPath);
+  app.add_option("--csv", csv_path, "write one CSV row per setting")->check(kNonEmptyPath);
   try {
     app.parse(argc, argv);  // argv[0] is the subcommand name, skipped like a program name
   } catch (const CLI::ParseError& e) {

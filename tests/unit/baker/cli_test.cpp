@@ -220,6 +220,7 @@ TEST(CliUsage, BadUsageExitsTwoWithOneLine) {
       {"--compress", "lz4", in}, {"--compress", "zstd:", in}, {"-j", "0", in},
       {"--bogus", in},          {},                         {"-q"},
       {"--pack", t / "p.oct", in},  // --pack excludes the -o appended below
+      {"--export-obj", "", in},   {"--depfile", "", in},    {"--for-scene", "", in},
   };
   for (const auto& args : bad) {
     const RunResult r = run_octbake(with(args, {"-o", t / "out"}));
@@ -228,6 +229,14 @@ TEST(CliUsage, BadUsageExitsTwoWithOneLine) {
     ASSERT_EQ(lines.size(), 1u) << testing::PrintToString(args) << r.err;
     EXPECT_EQ(lines[0].rfind("octbake: error: ", 0), 0u) << lines[0];
     EXPECT_FALSE(std::filesystem::exists(t / "out")) << testing::PrintToString(args);
+  }
+  // An empty output path is refused, not taken as the default folder.
+  for (const std::vector<std::string>& args : {std::vector<std::string>{"--pack", "", in},
+                                               std::vector<std::string>{"-o", "", in}}) {
+    const RunResult r = run_octbake(args);
+    EXPECT_EQ(r.exit_code, 2) << testing::PrintToString(args);
+    EXPECT_EQ(r.err_lines().size(), 1u) << r.err;
+    EXPECT_NE(r.err.find("an empty path"), std::string::npos) << r.err;
   }
   const RunResult help = run_octbake({"--help"});
   EXPECT_EQ(help.exit_code, 0);

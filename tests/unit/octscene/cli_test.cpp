@@ -86,6 +86,13 @@ TEST(Cli, UsageErrorsAreOnePrefixedLine) {
            {"gen --static 1 --moving 1 --seed 1 --models cube --baked " + (dir / "baked").string() + " --spin-share nan", "--spin-share"},
            {"gen --static 1 --moving 1 --seed 1 --models cube --baked " + (dir / "baked").string() + " --scale-range 2,1", "--scale-range"},
            {"gen --static 1 --moving 1 --seed 1 --models cube --baked " + (dir / "baked").string() + " --scale-range nan,1", "--scale-range"},
+           // An empty path is refused, not taken as "none" or a default.
+           {"run " + scene + " --log ''", "--log: an empty path"},
+           {"run " + scene + " --baked ''", "--baked: an empty path"},
+           {"run " + scene + " --write-budget ''", "--write-budget: an empty path"},
+           {"trade " + scene + " --csv ''", "--csv: an empty path"},
+           {"picture scene " + scene + " --out ''", "--out: an empty path"},
+           {"gen --static 1 --moving 1 --seed 1 --models cube --baked ''", "--baked: an empty path"},
            // Options whose scene `run` would refuse (a far plane of 1e308 * 10).
            {"gen --static 1 --moving 1 --seed 1 --models cube --baked " + (dir / "baked").string() + " --world 1e308", "run rejects"},
            {"gen --static 1 --moving 1 --seed 1 --models cube --baked " + (dir / "baked").string() + " --spin-share 1 --spin-rate 1e308",
