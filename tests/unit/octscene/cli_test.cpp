@@ -29,6 +29,15 @@ std::string small_scene() {
       .dump();
 }
 
+// `r` exited with `status` and printed exactly one "octscene: error: " line
+// holding `names`.
+void expect_one_error(const Command& r, int status, const std::string& args, const std::string& names) {
+  EXPECT_EQ(r.status, status) << args << "\n" << r.err;
+  EXPECT_EQ(r.err.rfind("octscene: error: ", 0), 0u) << args << "\n" << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << args << "\n" << r.err;
+  EXPECT_NE(r.err.find(names), std::string::npos) << args << "\n" << r.err;
+}
+
 TEST(Cli, HelpListsEverySubcommand) {
   const fs::path& dir = scratch_with_trees();
   Command c = run_command(kOctscene + " --help", dir);
@@ -56,6 +65,7 @@ TEST(Cli, UsageErrorsAreOnePrefixedLine) {
   const fs::path& dir = scratch_with_trees();
   write_text(dir / "cli.json", small_scene());
   const std::string scene = (dir / "cli.json").string();
+  const std::string gen = "gen --static 1 --moving 1 --seed 1 --models cube --baked " + (dir / "baked").string();
   struct Case {
     std::string args, names;  // `names`: a part of the message
   };
@@ -81,11 +91,11 @@ TEST(Cli, UsageErrorsAreOnePrefixedLine) {
            {"picture scene " + scene + " --out x.png --pixel-tolerance nan", "--pixel-tolerance"},
            {"picture scene " + scene + " --out x.png --min-depth 5 --max-depth 2",
             "--min-depth 5 is above --max-depth 2"},
-           {"gen --static 1 --moving 1 --seed 1 --models cube --baked " + (dir / "baked").string() + " --timestep nan", "--timestep"},
-           {"gen --static 1 --moving 1 --seed 1 --models cube --baked " + (dir / "baked").string() + " --world nan", "--world"},
-           {"gen --static 1 --moving 1 --seed 1 --models cube --baked " + (dir / "baked").string() + " --spin-share nan", "--spin-share"},
-           {"gen --static 1 --moving 1 --seed 1 --models cube --baked " + (dir / "baked").string() + " --scale-range 2,1", "--scale-range"},
-           {"gen --static 1 --moving 1 --seed 1 --models cube --baked " + (dir / "baked").string() + " --scale-range nan,1", "--scale-range"},
+           {gen + " --timestep nan", "--timestep"},
+           {gen + " --world nan", "--world"},
+           {gen + " --spin-share nan", "--spin-share"},
+           {gen + " --scale-range 2,1", "--scale-range"},
+           {gen + " --scale-range nan,1", "--scale-range"},
            // An empty path is refused, not taken as "none" or a default.
            {"run " + scene + " --log ''", "--log: an empty path"},
            {"run " + scene + " --baked ''", "--baked: an empty path"},
@@ -94,14 +104,9 @@ TEST(Cli, UsageErrorsAreOnePrefixedLine) {
            {"picture scene " + scene + " --out ''", "--out: an empty path"},
            {"gen --static 1 --moving 1 --seed 1 --models cube --baked ''", "--baked: an empty path"},
            // Options whose scene `run` would refuse (a far plane of 1e308 * 10).
-           {"gen --static 1 --moving 1 --seed 1 --models cube --baked " + (dir / "baked").string() + " --world 1e308", "run rejects"},
-           {"gen --static 1 --moving 1 --seed 1 --models cube --baked " + (dir / "baked").string() + " --spin-share 1 --spin-rate 1e308",
-            "run rejects"}}) {
-    Command r = run_command(kOctscene + " " + c.args, dir);
-    EXPECT_EQ(r.status, 2) << c.args << "\n" << r.err;
-    EXPECT_EQ(r.err.rfind("octscene: error: ", 0), 0u) << c.args << "\n" << r.err;
-    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << c.args << "\n" << r.err;
-    EXPECT_NE(r.err.find(c.names), std::string::npos) << c.args << "\n" << r.err;
+           {gen + " --world 1e308", "run rejects"},
+           {gen + " --spin-share 1 --spin-rate 1e308", "run rejects"}}) {
+    expect_one_error(run_command(kOctscene + " " + c.args, dir), 2, c.args, c.names);
   }
 }
 
@@ -136,10 +141,7 @@ TEST(Cli, DevicesFifosAndHugeFrameCountsAreErrorsNotHangs) {
            {"run " + (dir / "many_frames.json").string(), "frames: must be in 0..100000000"},
            {"plan " + (dir / "many_frames.json").string(), "frames: must be in 0..100000000"}}) {
     // timeout: a regression hangs; it must not hang the suite.
-    Command r = run_command("timeout 60 " + kOctscene + " " + c.args, dir);
-    EXPECT_EQ(r.status, 1) << c.args << "\n" << r.err;
-    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << c.args << "\n" << r.err;
-    EXPECT_NE(r.err.find(c.names), std::string::npos) << c.args << "\n" << r.err;
+    expect_one_error(run_command("timeout 60 " + kOctscene + " " + c.args, dir), 1, c.args, c.names);
   }
   // A pipe is read like a file (`octscene run <(...)`).
   Command piped = run_command("cat " + cli + " > " + (dir / "scene.fifo").string() + " & timeout 60 " + kOctscene +
