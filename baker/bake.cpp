@@ -16,6 +16,7 @@
 
 #include "build_tree.h"
 #include "cli.h"
+#include "import_child.h"
 #include "octbake/baked_file.h"
 #include "octbake/baker.h"
 #include "write.h"
@@ -230,12 +231,15 @@ std::optional<std::vector<OctreeMasks>> load_if_current(const std::string& path,
   return masks;
 }
 
-// Imports input i (public API: load_mesh, recording the files read) and
-// builds its tree on threads from `threads`, showing its progress on
-// `reporter`; the error is the reason only.
-Result<TreeToEncode> bake_tree(const Input& in, size_t i, const BakeOptions& options, ThreadBudget& threads,
+// Imports input i (public API: load_mesh, recording the files read; in a
+// child process when config.import_helper is set) and builds its tree on
+// threads from `threads`, showing its progress on `reporter`; the error is
+// the reason only.
+Result<TreeToEncode> bake_tree(const Input& in, size_t i, const BakeConfig& config, ThreadBudget& threads,
                                Reporter& reporter, std::vector<std::string>* files_read) {
-  auto mesh = load_mesh(in.path, files_read);
+  auto mesh = config.import_helper.empty()
+                  ? load_mesh(in.path, files_read)
+                  : load_mesh_in_child(config.import_helper, in.path, files_read, config.import_timeout_s);
   if (!mesh) return Error{mesh.error().code, error_reason(mesh.error(), in.path)};
   BuildControl control{&threads, {}};
   if (reporter.live())
@@ -245,10 +249,10 @@ Result<TreeToEncode> bake_tree(const Input& in, size_t i, const BakeOptions& opt
   TreeToEncode t;
   t.name = in.name;
   t.source_hash = in.hash;
-  t.options = options;
+  t.options = config.options;
   t.triangle_count = mesh->triangles.size();
   t.vertex_count = mesh->positions.size();
-  t.masks = build_tree(*mesh, options.depth, options.occupancy, control);
+  t.masks = build_tree(*mesh, config.options.depth, config.options.occupancy, control);
   return t;
 }
 
@@ -402,7 +406,7 @@ class Baker {
       }
     }
     std::vector<std::string> files_read;
-    auto tree = bake_tree(in, i, config_.options, threads_, *reporter_, &files_read);
+    auto tree = bake_tree(in, i, config_, threads_, *reporter_, &files_read);
     if (!tree) return fail(i, tree.error().message);
     const std::vector<uint8_t> bytes = encode_with({&*tree, 1}, threads_, /*held=*/true);
     auto written = write_file_atomic(in.output, bytes);
@@ -447,7 +451,7 @@ class Baker {
 
     parallel_for(inputs_.size(), threads_, [&](size_t i) {
       guarded(i, [&] {
-        auto tree = bake_tree(inputs_[i], i, config_.options, threads_, *reporter_, nullptr);
+        auto tree = bake_tree(inputs_[i], i, config_, threads_, *reporter_, nullptr);
         if (!tree) return fail(i, tree.error().message);
         const std::string problem = export_tree(tree->masks, inputs_[i].name);
         if (!problem.empty()) return fail(i, problem);

@@ -24,6 +24,9 @@ struct BakeConfig {
   bool progress = false;           // updating progress line on the error stream (a terminal)
   bool summary = false;            // one summary line on the error stream at the end
   std::string depfile;             // non-empty (one input, no pack): write "OUTPUT: FILES READ" here
+  std::string import_helper;       // non-empty: import each mesh in a child process of this
+                                   // executable (import_child.h), so a crash costs one input
+  double import_timeout_s = 120;   // with import_helper: a child still importing is killed (0: never)
 };
 
 struct BakeSummary {

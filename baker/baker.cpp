@@ -6,6 +6,7 @@
 #include <cmath>
 #include <exception>
 #include <filesystem>
+#include <new>
 
 #include "build_tree.h"
 #include "import.h"
@@ -82,7 +83,9 @@ Result<Mesh> load_mesh(const std::string& path, std::vector<std::string>* files_
     auto mesh = import_mesh(path, files_read);
     if (!mesh) return with_label(mesh.error(), path);
     return mesh;
-  } catch (const std::exception& e) {  // bad_alloc on a huge file
+  } catch (const std::bad_alloc&) {  // a huge file, or a malformed one that asks for too much
+    return Error{ErrorCode::invalid_argument, path + ": out of memory reading this file"};
+  } catch (const std::exception& e) {
     return Error{ErrorCode::invalid_argument, path + ": " + e.what()};
   }
 }

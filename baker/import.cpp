@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <new>
 #include <numeric>
 
 namespace octbake {
@@ -140,6 +141,29 @@ Result<bool> check_off_header(const std::string& path, uintmax_t size) {
   return true;
 }
 
+// assimp's PLY reader, given a header that never ends (a file cut short
+// inside its header, or "end_header" mangled or run into the line before or
+// the data after), crashes or reads past the end forever. A header is a few
+// lines: refuse a PLY whose first MiB holds no line "end_header" (trailing
+// blanks and a CR allowed).
+Result<bool> check_ply_header(const std::string& path) {
+  constexpr size_t kMaxHeader = 1 << 20;
+  std::ifstream in(path, std::ios::binary);
+  std::string head(kMaxHeader, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<size_t>(in.gcount()));
+  const bool is_ply = head.size() > 3 && head.compare(0, 3, "ply") == 0 && std::isspace(static_cast<unsigned char>(head[3]));
+  if (!is_ply) return true;
+  for (size_t start = 0, end; (end = head.find('\n', start)) != std::string::npos; start = end + 1) {
+    size_t last = end;
+    while (last > start && (head[last - 1] == '\r' || head[last - 1] == ' ' || head[last - 1] == '\t')) --last;
+    if (head.compare(start, last - start, "end_header") == 0) return true;
+  }
+  return refuse(ErrorCode::invalid_argument, head.size() < kMaxHeader
+                                                 ? "PLY header has no end_header line (file cut short or damaged)"
+                                                 : "PLY header has no end_header line in its first MiB");
+}
+
 // assimp's own file access, recording each file it opens: an OBJ's .mtl, a
 // glTF's .bin are read through here, so a build system can depend on them.
 class RecordingIOSystem : public Assimp::DefaultIOSystem {
@@ -201,6 +225,7 @@ Result<Mesh> import_mesh(const std::string& path, std::vector<std::string>* file
   if (ec) return refuse(ErrorCode::io_error, "cannot read the file size");
   if (size == 0) return refuse(ErrorCode::invalid_argument, "empty file");
   if (Result<bool> r = check_off_header(path, size); !r) return r.error();
+  if (Result<bool> r = check_ply_header(path); !r) return r.error();
 
   // No DefaultLogger is created, so assimp logs nothing. Our own walk of the
   // node graph applies the transforms (PreTransformVertices would also merge
@@ -211,12 +236,18 @@ Result<Mesh> import_mesh(const std::string& path, std::vector<std::string>* file
   const aiScene* scene = nullptr;
   try {
     scene = importer.ReadFile(path, aiProcess_Triangulate | aiProcess_ValidateDataStructure);
+  } catch (const std::bad_alloc&) {
+    return refuse(ErrorCode::invalid_argument, "out of memory reading this file");
   } catch (const std::exception& e) {
     return refuse(ErrorCode::invalid_argument, one_line(e.what()));
   } catch (...) {
     return refuse(ErrorCode::invalid_argument, "unreadable or unsupported file");
   }
-  if (scene == nullptr) return refuse(ErrorCode::invalid_argument, one_line(importer.GetErrorString()));
+  if (scene == nullptr) {
+    // assimp catches its own exceptions and keeps only what() as the error.
+    const std::string reason = one_line(importer.GetErrorString());
+    return refuse(ErrorCode::invalid_argument, reason == "std::bad_alloc" ? "out of memory reading this file" : reason);
+  }
   if (scene->mNumMeshes == 0 || scene->mMeshes == nullptr || scene->mRootNode == nullptr)
     return refuse(ErrorCode::invalid_argument, "empty scene (no meshes)");
 

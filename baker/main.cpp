@@ -5,15 +5,23 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>
+#include <cstring>
+#include <filesystem>
 
 #include "bake.h"
 #include "cli.h"
+#include "cli_util.h"  // octscene's: kFiniteNumber
 #include "for_scene.h"
+#include "import_child.h"
 #include "octbake/collision_world.h"
 #include "octbake/version.h"
 
 int main(int argc, char** argv) {
   using namespace octbake;
+  // This executable started again by itself to import one mesh (import_child.h).
+  // _exit: its answer is written; no exit-time work (static destructors, a
+  // sanitizer's leak report on what assimp left) can change its status.
+  if (argc == 3 && std::strcmp(argv[1], kImportChildFlag) == 0) ::_exit(run_import_child(argv[2], STDOUT_FILENO));
   CLI::App app{"Bakes meshes (any format assimp reads) into conservative octree files (.oct).", "octbake"};
   app.set_version_flag("--version", kLibraryVersion);
 
@@ -55,6 +63,11 @@ int main(int argc, char** argv) {
   std::string for_scene;
   app.add_option("--for-scene", for_scene, "Bake only the FILEs whose model SCENE.json names, each to the depth its run needs")
       ->check(non_empty);
+  app.add_option("--import-timeout", config.import_timeout_s,
+                 "Seconds an input's import may take before it fails (0: no limit); each import runs in a child process")
+      ->check(CLI::NonNegativeNumber)
+      ->check(scene::kFiniteNumber)
+      ->capture_default_str();
   app.add_option("--depfile", config.depfile, "Also write FILE: a Make rule OUTPUT: every file the import read (one input; implies --force)")
       ->check(non_empty);
 
@@ -86,6 +99,13 @@ int main(int argc, char** argv) {
   config.force = config.force || !config.depfile.empty();  // a build system asked: the output must change time
   config.options.occupancy = *parse_occupancy(occupancy);
   std::tie(config.options.compression, config.options.compression_level) = *parse_compression(compress);
+  // Each import in a child process of this executable: an importer crash or
+  // hang on one malformed file then fails that input alone.
+  // The path, not "/proc/self/exe" itself: under an emulator (qemu-user)
+  // that names the emulator, while reading the link gives this program.
+  std::error_code no_proc;
+  const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", no_proc);
+  if (!no_proc) config.import_helper = self.string();
   config.progress = !quiet && ::isatty(STDERR_FILENO);
   config.summary = !quiet;
   if (!for_scene.empty()) return bake_for_scene(for_scene, config, stderr);

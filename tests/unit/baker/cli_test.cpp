@@ -221,6 +221,7 @@ TEST(CliUsage, BadUsageExitsTwoWithOneLine) {
       {"--bogus", in},          {},                         {"-q"},
       {"--pack", t / "p.oct", in},  // --pack excludes the -o appended below
       {"--export-obj", "", in},   {"--depfile", "", in},    {"--for-scene", "", in},
+      {"--import-timeout", "-1", in}, {"--import-timeout", "nan", in}, {"--import-timeout", "soon", in},
   };
   for (const auto& args : bad) {
     const RunResult r = run_octbake(with(args, {"-o", t / "out"}));

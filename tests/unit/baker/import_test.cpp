@@ -164,6 +164,37 @@ TEST_F(ImportTest, RefusesOffHeaderClaimingMoreThanTheFileHolds) {
   EXPECT_EQ(ok->triangles.size(), 1u);
 }
 
+TEST_F(ImportTest, RefusesPlyWhoseHeaderNeverEnds) {
+  // assimp reads past the end forever, or crashes, on these: every cut of a
+  // good PLY inside its header is refused before assimp sees it.
+  const std::string header =
+      "ply\nformat ascii 1.0\ncomment made by hand\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  const std::string body = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  const Result<Mesh> whole = import_mesh(write("whole.ply", header + body));
+  ASSERT_TRUE(whole.ok()) << whole.error().message;
+  EXPECT_EQ(whole->triangles.size(), 1u);
+  for (size_t cut = 4; cut < header.size() - 1; ++cut)
+    expect_refused_with(write("cut.ply", header.substr(0, cut)), "PLY header has no end_header line");
+  // "end_header" run into the line before or after is no end either.
+  auto replaced = [&](const std::string& from, const std::string& to) {
+    std::string text = header + body;
+    return text.replace(text.find(from), from.size(), to);
+  };
+  expect_refused_with(write("joined.ply", replaced("vertex_indices\nend_header", "vertex_indicesend_header")),
+                      "PLY header has no end_header line");
+  expect_refused_with(write("mangled.ply", replaced("end_header", "end_0eader")), "PLY header has no end_header line");
+  // The files that crashed (SIGSEGV) and hung the importer, in process.
+  for (const char* name : {"ply_no_end_header_segv.ply", "ply_no_end_header_hang.ply"})
+    expect_refused_with(std::string(OCTBAKE_SOURCE_DIR) + "/tests/hostile/" + name, "PLY header has no end_header line");
+  // A CR and trailing blanks end a line as well.
+  for (const char* end : {"end_header\r\n", "end_header  \t\n"}) {
+    const Result<Mesh> r = import_mesh(write("crlf.ply", replaced("end_header\n", end)));
+    ASSERT_TRUE(r.ok()) << end << ": " << r.error().message;
+    EXPECT_EQ(r->triangles.size(), 1u);
+  }
+}
+
 TEST_F(ImportTest, JoinsExactlyIdenticalVerticesOnly) {
   // Two triangles sharing an edge, written as separate vertices, plus a
   // vertex 1e-12 away from another: only exact duplicates merge.
