@@ -178,9 +178,11 @@ SceneObject parse_object(const json& j, const std::string& path) {
   check_keys(j, path, {"name", "model", "position", "rotation", "scale", "velocity", "angular_velocity"});
   SceneObject o;
   o.name = string(require(j, path, "name"), join(path, "name"));
-  // Names go unquoted into the CSV log.
-  if (o.name.find_first_of(",\"\r\n") != std::string::npos)
-    fail(join(path, "name"), "must not contain a comma, a quote or a line break");
+  // Names go unquoted into the CSV log: no separator, quote, line break,
+  // nor a NUL or other control character that a reader could cut at.
+  if (std::any_of(o.name.begin(), o.name.end(),
+                  [](char c) { return c == ',' || c == '"' || static_cast<unsigned char>(c) < 0x20 || c == 0x7f; }))
+    fail(join(path, "name"), "must not contain a comma, a quote, a line break or another control character");
   o.model = string(require(j, path, "model"), join(path, "model"));
   o.pose.position = vec3(require(j, path, "position"), join(path, "position"));
   if (const json* v = find(j, "rotation")) {
