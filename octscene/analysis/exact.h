@@ -53,6 +53,13 @@ class ExactMeshes {
   std::map<std::pair<int, double>, std::shared_ptr<Bvh>> bvhs_;
 };
 
+// FCL squares coordinates (fitting its OBBs, RSS distances): past about
+// 1e154 the squares overflow and its answers are wrong (measured on a car
+// scaled by s against a human: Eigen "Jacobi" warnings from s = 1e153, a
+// contact that is not there at 1e155). Scenes whose coordinates stay within
+// this limit are scored; others are refused.
+inline constexpr double kExactCoordinateLimit = 1e150;
+
 using PairList = std::vector<std::pair<uint32_t, uint32_t>>;
 
 // The mesh's own axis-aligned bounds (mesh non-empty).

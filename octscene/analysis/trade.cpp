@@ -11,6 +11,9 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
+#include <optional>
+#include <span>
 #include <sstream>
 
 #include "cli_util.h"
@@ -85,6 +88,34 @@ std::string depth_pairs_text(const std::map<std::pair<int, int>, uint64_t>& coun
   return s.empty() ? "-" : s;
 }
 
+// Where the scene reaches past what the exact side computes reliably
+// (kExactCoordinateLimit): an object's scaled mesh, its start, the distance
+// it can travel in the run, or the world box it moves in. The score would
+// otherwise count FCL's overflow as octbake's misses.
+std::optional<std::string> beyond_exact_range(const Scene& scene, std::span<const int> mesh_of_object,
+                                              std::span<const Aabb> local_bounds) {
+  auto limit_text = [](double v) {
+    std::ostringstream s;
+    s << std::setprecision(3) << v;
+    return s.str();
+  };
+  const double world = std::max(scene.world.min.cwiseAbs().maxCoeff(), scene.world.max.cwiseAbs().maxCoeff());
+  if (!(world <= kExactCoordinateLimit))
+    return "world box reaches " + limit_text(world) + ", past the " + limit_text(kExactCoordinateLimit) +
+           " the exact reference (FCL) computes with reliably";
+  const double duration = double(scene.frames) * scene.timestep;
+  for (size_t i = 0; i < scene.objects.size(); ++i) {
+    const SceneObject& o = scene.objects[i];
+    const Aabb& b = local_bounds[size_t(mesh_of_object[i])];
+    const double mesh = o.pose.scale * std::max(b.min.cwiseAbs().maxCoeff(), b.max.cwiseAbs().maxCoeff());
+    const double reach = mesh + o.pose.position.cwiseAbs().maxCoeff() + o.velocity.cwiseAbs().maxCoeff() * duration;
+    if (!(reach <= kExactCoordinateLimit))
+      return "object \"" + o.name + "\" reaches " + limit_text(reach) + ", past the " +
+             limit_text(kExactCoordinateLimit) + " the exact reference (FCL) computes with reliably";
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 Result<TradeReport> run_trade(const Scene& scene, ModelLibrary& library, const TradeOptions& options) {
@@ -128,6 +159,7 @@ Result<TradeReport> run_trade(const Scene& scene, ModelLibrary& library, const T
   }
   std::vector<int> mesh_of_object(scene.objects.size());
   for (size_t i = 0; i < scene.objects.size(); ++i) mesh_of_object[i] = static_cast<int>(models->tree_of_object[i]);
+  if (auto problem = beyond_exact_range(scene, mesh_of_object, local_bounds)) return Error{ErrorCode::invalid_argument, *problem};
 
   std::vector<PairList> exact;        // per frame
   std::vector<uint64_t> pose_hashes;  // per frame, from the first run

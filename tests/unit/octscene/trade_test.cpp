@@ -1,6 +1,8 @@
 // octscene trade: the exact mesh-mesh helper on hand-made cases and against an
 // independent box-box oracle, then the whole trade on small random scenes.
 #include <gtest/gtest.h>
+
+#include <functional>
 #include <stdlib.h>
 
 #include <cmath>
@@ -288,6 +290,44 @@ TEST_F(TradeScene, MissingMeshIsAnError) {
   auto report = run_trade(scene, *library, options);
   ASSERT_FALSE(report);
   EXPECT_EQ(report.error().code, ErrorCode::not_found);
+}
+
+TEST_F(TradeScene, CoordinatesPastTheExactRangeAreAnError) {
+  // FCL's squares overflow past ~1e154: it reported a contact that is not
+  // there, which the score counted as octbake's miss. Refused instead; just
+  // inside the limit the scene is scored, recall 1.
+  auto library = ModelLibrary::open((dir_ / "baked").string());
+  ASSERT_TRUE(library);
+  TradeOptions options;
+  options.meshes = (dir_ / "meshes").string();
+  options.max_depth = 2;
+  auto trade = [&](const std::function<void(Scene&)>& edit) {
+    Scene scene = random_scene(5, /*objects=*/3, /*frames=*/2);
+    edit(scene);
+    return run_trade(scene, *library, options);
+  };
+  struct Case {
+    std::function<void(Scene&)> edit;
+    std::string reason;
+  };
+  const Case refused[] = {
+      {[](Scene& s) { s.objects[1].pose.scale = 1e155; }, "object \"obj_1\" reaches 1.2e+155"},
+      {[](Scene& s) { s.objects[2].pose.position.y() = -2e151; }, "object \"obj_2\" reaches 2e+151"},
+      {[](Scene& s) { s.objects[0].velocity.x() = 1e152; }, "object \"obj_0\" reaches"},
+      {[](Scene& s) { s.world.max.z() = 1e160; }, "world box reaches 1e+160"},
+  };
+  for (const Case& c : refused) {
+    auto report = trade(c.edit);
+    ASSERT_FALSE(report) << c.reason;
+    EXPECT_EQ(report.error().code, ErrorCode::invalid_argument);
+    EXPECT_EQ(report.error().message.rfind(c.reason, 0), 0u) << report.error().message;
+    EXPECT_NE(report.error().message.find("the exact reference (FCL)"), std::string::npos) << report.error().message;
+  }
+  // Big but inside: an object scaled by 1e140 swallowing the others.
+  auto inside = trade([](Scene& s) { s.objects[1].pose.scale = 1e140; });
+  ASSERT_TRUE(inside) << inside.error().message;
+  for (const TradeRow& row : inside->rows) EXPECT_EQ(row.false_negatives, 0u) << row.label;
+  EXPECT_TRUE(inside->misses.empty());
 }
 
 }  // namespace
