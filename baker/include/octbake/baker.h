@@ -50,7 +50,12 @@ struct Mesh {
 // build system must watch to know when to rebake.
 // Errors: not_found (no such file), io_error (unreadable), invalid_argument
 // (directory, empty, malformed, points or lines only, NaN or infinite
-// coordinates, headers that claim more data than the file holds).
+// coordinates, headers that claim more data than the file holds, a PLY
+// header without end_header, out of memory).
+// The importer (assimp) runs in the calling process: a malformed file that
+// crashes or hangs assimp crashes or hangs the caller. The `octbake` tool
+// imports each file in a child process instead; an app that reads untrusted
+// files can do the same (run `octbake` on them, or call this in a child).
 OCTBAKE_BAKER_API Result<Mesh> load_mesh(const std::string& path, std::vector<std::string>* files_read = nullptr);
 
 // A mesh from flat arrays: `vertices` holds x, y, z per vertex, `indices`
