@@ -4,6 +4,7 @@
 #include <poll.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/prctl.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -14,6 +15,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <optional>
 #include <type_traits>
@@ -34,6 +36,7 @@ namespace {
 
 // The child's answer on its stdout: magic, the files read, then the mesh
 // or the error. Native byte order: the child is this same executable.
+constexpr const char* kParentVariable = "OCTBAKE_IMPORT_PARENT";
 constexpr char kMagic[8] = {'O', 'C', 'T', 'B', 'I', 'M', 'P', '1'};
 static_assert(sizeof(Eigen::Vector3d) == 3 * sizeof(double));
 static_assert(sizeof(std::array<uint32_t, 3>) == 3 * sizeof(uint32_t));
@@ -156,14 +159,18 @@ struct Child {
 // blocks with huge pages. assimp's OBJ reader zeroes a 16 MB buffer; in a
 // fresh process its 4,096 page faults were most of an import's cost (19 ->
 // 8 ms a one-triangle OBJ here). Other C libraries ignore the setting.
+// It also names this process (kParentVariable), so the child can tell
+// whether it outlived it.
 std::vector<std::string> child_environment() {
   std::vector<std::string> env;
   std::string tunables = "GLIBC_TUNABLES=glibc.malloc.hugetlb=1";
+  const std::string parent_prefix = std::string(kParentVariable) + "=";
   for (char** e = environ; *e != nullptr; ++e) {
     if (std::strncmp(*e, "GLIBC_TUNABLES=", 15) == 0) tunables = std::string(*e) + ":glibc.malloc.hugetlb=1";
-    else env.emplace_back(*e);
+    else if (std::strncmp(*e, parent_prefix.c_str(), parent_prefix.size()) != 0) env.emplace_back(*e);
   }
   env.push_back(tunables);
+  env.push_back(parent_prefix + std::to_string(::getpid()));
   return env;
 }
 
@@ -254,9 +261,22 @@ void limit_memory() {
 #endif
 }
 
+// A child whose octbake was killed (SIGKILL, so nothing could stop it) must
+// not import on, a hang for ever: the kernel kills it with its parent. The
+// parent may have died before that was asked: then it is no longer our
+// parent, and the child stops at once.
+void die_with_parent() {
+#ifdef __linux__
+  ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+#endif
+  const char* parent = std::getenv(kParentVariable);
+  if (parent != nullptr && *parent != '\0' && std::to_string(::getppid()) != parent) ::_exit(1);
+}
+
 }  // namespace
 
 int run_import_child(const char* path, int out_fd) {
+  die_with_parent();
   limit_memory();
   std::vector<std::string> files_read;
   const std::string bytes = encode(load_mesh(path, &files_read), files_read);

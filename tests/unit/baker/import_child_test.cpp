@@ -90,6 +90,7 @@ TEST(ImportChild, ACrashHangOrGarbageIsOneErrorNamingTheFile) {
     std::string reason;  // the message after "PATH: "
   };
   const std::string real = OCTBAKE_BIN;
+  const std::string unparented = "env -u OCTBAKE_IMPORT_PARENT \"" + real + "\" \"$1\" \"$2\"";
   const Case cases[] = {
       {"segv", "kill -SEGV $$", "the importer crashed on this file (SIGSEGV)"},
       {"abort", "echo 'ai_assert failure' >&2; kill -ABRT $$", "the importer crashed on this file (SIGABRT)"},
@@ -99,9 +100,12 @@ TEST(ImportChild, ACrashHangOrGarbageIsOneErrorNamingTheFile) {
       {"exit3", "exit 3", "the importer stopped without a result (exit status 3)"},
       {"garbage", "echo hello", "the importer gave a malformed answer"},
       {"nothing", "exit 0", "the importer gave a malformed answer"},
-      // A real answer cut short, and one with a byte too many.
-      {"truncated", "\"" + real + "\" \"$1\" \"$2\" | head -c 100", "the importer gave a malformed answer"},
-      {"trailing", "\"" + real + "\" \"$1\" \"$2\"; printf x", "the importer gave a malformed answer"},
+      // A real answer cut short, and one with a byte too many (the real
+      // child below the shell is not the test's child: it is told so).
+      {"truncated", unparented + " | head -c 100", "the importer gave a malformed answer"},
+      {"trailing", unparented + "; printf x", "the importer gave a malformed answer"},
+      // A child whose parent is not the one that started it stops at once.
+      {"orphan", "\"" + real + "\" \"$1\" \"$2\"", "the importer stopped without a result (exit status 1)"},
   };
   for (const Case& c : cases) {
     const std::string helper = helper_script(t, c.helper, c.script);
