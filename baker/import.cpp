@@ -15,6 +15,7 @@
 #include <limits>
 #include <new>
 #include <numeric>
+#include <string_view>
 
 namespace octbake {
 namespace {
@@ -142,22 +143,33 @@ Result<bool> check_off_header(const std::string& path, uintmax_t size) {
 }
 
 // assimp's PLY reader, given a header that never ends (a file cut short
-// inside its header, or "end_header" mangled or run into the line before or
+// inside its header, or "end_header" mangled or run into the token before or
 // the data after), crashes or reads past the end forever. A header is a few
-// lines: refuse a PLY whose first MiB holds no line "end_header" (trailing
-// blanks and a CR allowed).
+// lines: refuse a PLY (first three bytes "ply" in any case, as assimp
+// checks) whose first MiB holds no line whose first token is "end_header",
+// read as assimp reads it: lines end at CR or LF, blanks before the token,
+// and a blank, form feed or NUL after it.
 Result<bool> check_ply_header(const std::string& path) {
   constexpr size_t kMaxHeader = 1 << 20;
   std::ifstream in(path, std::ios::binary);
   std::string head(kMaxHeader, '\0');
   in.read(head.data(), static_cast<std::streamsize>(head.size()));
   head.resize(static_cast<size_t>(in.gcount()));
-  const bool is_ply = head.size() > 3 && head.compare(0, 3, "ply") == 0 && std::isspace(static_cast<unsigned char>(head[3]));
-  if (!is_ply) return true;
-  for (size_t start = 0, end; (end = head.find('\n', start)) != std::string::npos; start = end + 1) {
-    size_t last = end;
-    while (last > start && (head[last - 1] == '\r' || head[last - 1] == ' ' || head[last - 1] == '\t')) --last;
-    if (head.compare(start, last - start, "end_header") == 0) return true;
+  auto lower = [](char c) { return static_cast<char>(std::tolower(static_cast<unsigned char>(c))); };
+  if (head.size() < 3 || lower(head[0]) != 'p' || lower(head[1]) != 'l' || lower(head[2]) != 'y') return true;
+  constexpr std::string_view kEnd = "end_header";
+  auto blank = [](char c) { return c == ' ' || c == '\t'; };
+  for (size_t at = 0; at < head.size();) {
+    while (at < head.size() && blank(head[at])) ++at;
+    if (head.compare(at, kEnd.size(), kEnd) == 0) {
+      const size_t after = at + kEnd.size();
+      if (after == head.size() || blank(head[after]) || head[after] == '\r' || head[after] == '\n' ||
+          head[after] == '\f' || head[after] == '\0')
+        return true;
+    }
+    at = head.find_first_of("\r\n", at);
+    if (at == std::string::npos) break;
+    ++at;
   }
   return refuse(ErrorCode::invalid_argument, head.size() < kMaxHeader
                                                  ? "PLY header has no end_header line (file cut short or damaged)"

@@ -197,7 +197,12 @@ std::optional<Child> spawn(const std::string& helper, const std::string& path) {
   for (std::string& e : env) envp.push_back(e.data());
   envp.push_back(nullptr);
   Child child;
-  const int rc = ::posix_spawn(&child.pid, helper.c_str(), &actions, &attr, argv, envp.data());
+  int rc = ::posix_spawn(&child.pid, helper.c_str(), &actions, &attr, argv, envp.data());
+  // A process limit reached for a moment (many jobs): wait a little, up to ~1 s.
+  for (int pause_ms = 5; rc == EAGAIN && pause_ms <= 320; pause_ms *= 2) {
+    ::usleep(static_cast<useconds_t>(1000 * pause_ms));
+    rc = ::posix_spawn(&child.pid, helper.c_str(), &actions, &attr, argv, envp.data());
+  }
   posix_spawn_file_actions_destroy(&actions);
   posix_spawnattr_destroy(&attr);
   ::close(pipe_fds[1]);
@@ -215,6 +220,8 @@ using Clock = std::chrono::steady_clock;
 // when the deadline (none when `timeout_s` is 0) passed first. A child
 // can close its stdout and go on running, so the wait has the deadline too.
 bool read_all_and_wait(const Child& child, double timeout_s, std::string& bytes, int& status) {
+  // Past a century is no limit at all, and would overflow the clock.
+  if (timeout_s > 3e9) timeout_s = 0;
   const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(timeout_s));
   auto ms_left = [&]() -> long long {
     if (timeout_s <= 0) return -1;
@@ -253,9 +260,10 @@ void limit_memory() {
   }
 #if !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__) && !OCTBAKE_HAS_SANITIZER
   const long pages = ::sysconf(_SC_PHYS_PAGES), page_size = ::sysconf(_SC_PAGE_SIZE);
-  if (pages > 0 && page_size > 0) {
-    const rlim_t half = rlim_t(pages) / 2 * rlim_t(page_size);
-    const rlimit limit{half, half};
+  rlimit limit{};
+  if (pages > 0 && page_size > 0 && ::getrlimit(RLIMIT_AS, &limit) == 0) {
+    // Lower only: a limit the user set (ulimit -v) stays as it is.
+    limit.rlim_cur = std::min<rlim_t>(limit.rlim_cur, rlim_t(pages) / 2 * rlim_t(page_size));
     ::setrlimit(RLIMIT_AS, &limit);
   }
 #endif

@@ -1,12 +1,13 @@
 // octbake: bakes meshes into ObjectTree files (docs/interface.md, "octbake").
 // Exit status: 0 all baked, 1 an input failed, 2 bad usage.
+#include <fcntl.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
-#include <filesystem>
 
 #include "bake.h"
 #include "cli.h"
@@ -22,6 +23,9 @@ int main(int argc, char** argv) {
   // _exit: its answer is written; no exit-time work (static destructors, a
   // sanitizer's leak report on what assimp left) can change its status.
   if (argc == 3 && std::strcmp(argv[1], kImportChildFlag) == 0) ::_exit(run_import_child(argv[2], STDOUT_FILENO));
+  // Children are waited for (import_child.h): an inherited "ignore SIGCHLD"
+  // would make the kernel reap them and hide how they ended.
+  ::signal(SIGCHLD, SIG_DFL);
   CLI::App app{"Bakes meshes (any format assimp reads) into conservative octree files (.oct).", "octbake"};
   app.set_version_flag("--version", kLibraryVersion);
 
@@ -101,11 +105,11 @@ int main(int argc, char** argv) {
   std::tie(config.options.compression, config.options.compression_level) = *parse_compression(compress);
   // Each import in a child process of this executable: an importer crash or
   // hang on one malformed file then fails that input alone.
-  // The path, not "/proc/self/exe" itself: under an emulator (qemu-user)
-  // that names the emulator, while reading the link gives this program.
-  std::error_code no_proc;
-  const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", no_proc);
-  if (!no_proc) config.import_helper = self.string();
+  // Started through a descriptor opened now, not by path: the program file
+  // may be deleted or replaced (a rebuild, an install) while this runs.
+  // Under qemu-user the open gives the emulated program, not the emulator.
+  const int self = ::open("/proc/self/exe", O_RDONLY | O_CLOEXEC);  // kept open to the end
+  if (self >= 0) config.import_helper = "/proc/self/fd/" + std::to_string(self);
   config.progress = !quiet && ::isatty(STDERR_FILENO);
   config.summary = !quiet;
   if (!for_scene.empty()) return bake_for_scene(for_scene, config, stderr);

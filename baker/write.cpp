@@ -98,8 +98,13 @@ Result<uint64_t> write_file_atomic(const std::string& path, std::span<const uint
   namespace fs = std::filesystem;
   const fs::path target(path);
   const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  const std::string temp_name = "." + target.filename().string() + ".tmp." + std::to_string(::getpid()) + "." +
-                                std::to_string(temp_counter.fetch_add(1));
+  // .<name>.tmp.<pid>.<n>; <name> is cut so the temp name stays within the
+  // 255 bytes a file name may have, or a long output name could not be
+  // written although it fits itself (pid and counter keep it unique).
+  const std::string suffix = ".tmp." + std::to_string(::getpid()) + "." + std::to_string(temp_counter.fetch_add(1));
+  constexpr size_t kMaxFileName = 255;
+  const std::string temp_name =
+      "." + target.filename().string().substr(0, kMaxFileName - 1 - suffix.size()) + suffix;
   const std::string temp = (dir / temp_name).string();
 
   Fd fd(::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666));

@@ -1,7 +1,11 @@
 // `octbake` on real meshes nobody here made (package assimp-testmodels), and
 // on a batch mixing good inputs with every kind of bad one.
 #include <gtest/gtest.h>
+#include <fcntl.h>
+#include <signal.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "cli_test_util.h"
 #include "import.h"
@@ -157,6 +161,93 @@ TEST(CliModels, ImporterCrashesFailOnlyTheirInput) {
   }
   expect_loadable(t / "out", good1);
   expect_loadable(t / "out", good2);
+}
+
+// Starts `bin args...` with stderr into `err_path`; with `ignore_sigchld`
+// as a parent that ignores SIGCHLD would start it (the setting is inherited).
+pid_t start(const std::string& bin, const std::vector<std::string>& args, const std::string& err_path,
+            bool ignore_sigchld) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    if (ignore_sigchld) ::signal(SIGCHLD, SIG_IGN);
+    const int err = ::open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(err, 2);
+    std::vector<char*> argv{const_cast<char*>(bin.c_str())};
+    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    ::execv(bin.c_str(), argv.data());
+    ::_exit(127);
+  }
+  return pid;
+}
+
+int exit_code(pid_t pid) {
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::vector<std::string> lines_of(const std::string& path) {
+  std::ifstream in(path);
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+// The import child is started from the program octbake was started from,
+// even when that file is deleted or replaced mid-run (a rebuild, an
+// install): the later inputs are still isolated and still bake. The first
+// input's import blocks opening its material file (a FIFO) until the
+// program file is gone, so the order of events is fixed.
+TEST(CliModels, ImportsStayIsolatedWhenTheProgramFileGoesMidRun) {
+  const std::string abort_ply = std::string(OCTBAKE_SOURCE_DIR) + "/tests/hostile/assimp_abort.ply";
+  for (const bool replace : {false, true}) {
+    SCOPED_TRACE(replace ? "replaced" : "deleted");
+    TempDir t;
+    const std::string bin = t / "octbake_copy";
+    fs::copy_file(OCTBAKE_BIN, bin);
+    ::chmod(bin.c_str(), 0755);
+    write_text(t / "first.obj", "mtllib wait.mtl\n" + test::random_obj(21, 20, 0.3));
+    ASSERT_EQ(::mkfifo((t / "wait.mtl").c_str(), 0600), 0);
+    write_text(t / "last.obj", test::random_obj(22, 20, 0.3));
+    const pid_t pid = start(bin, {"-q", "-j1", "-d", "4", "-o", t / "out", t / "first.obj", abort_ply, t / "last.obj"},
+                            t / "err.txt", false);
+    // The FIFO has a reader once the first import opened it.
+    int writer = -1;
+    for (int tries = 0; writer < 0 && tries < 30000; ++tries) {
+      writer = ::open((t / "wait.mtl").c_str(), O_WRONLY | O_NONBLOCK);
+      if (writer < 0) ::usleep(1000);
+    }
+    ASSERT_GE(writer, 0) << "the first import never opened its material file";
+    if (replace) {
+      write_text(t / "new", "#!/bin/sh\nexit 0\n");
+      ::chmod((t / "new").c_str(), 0755);
+      fs::rename(t / "new", bin);
+    } else {
+      fs::remove(bin);
+    }
+    ::close(writer);  // an empty material file: the first import goes on
+    EXPECT_EQ(exit_code(pid), 1);
+    const auto lines = lines_of(t / "err.txt");
+    ASSERT_EQ(lines.size(), 1u) << (lines.empty() ? "" : lines[0]);
+    EXPECT_EQ(lines[0], "octbake: error: " + abort_ply + ": the importer crashed on this file (SIGABRT)");
+    expect_loadable(t / "out", t / "first.obj");
+    expect_loadable(t / "out", t / "last.obj");
+  }
+}
+
+// A parent that ignores SIGCHLD passes that on; the kernel would then reap
+// the import children itself and hide how they ended.
+TEST(CliModels, AnInheritedIgnoredSigchldStillShowsHowAnImportEnded) {
+  TempDir t;
+  const std::string abort_ply = std::string(OCTBAKE_SOURCE_DIR) + "/tests/hostile/assimp_abort.ply";
+  write_text(t / "good.obj", test::random_obj(23, 20, 0.3));
+  const pid_t pid = start(OCTBAKE_BIN, {"-q", "-o", t / "out", abort_ply, t / "good.obj"}, t / "err.txt", true);
+  EXPECT_EQ(exit_code(pid), 1);
+  EXPECT_EQ(lines_of(t / "err.txt"),
+            std::vector<std::string>{"octbake: error: " + abort_ply + ": the importer crashed on this file (SIGABRT)"});
+  expect_loadable(t / "out", t / "good.obj");
 }
 
 }  // namespace

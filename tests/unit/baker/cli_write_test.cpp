@@ -60,6 +60,17 @@ TEST(CliWrite, AtomicWriteReplacesAndLeavesNoTemp) {
   EXPECT_FALSE(write_file_atomic(t / "dir.oct", a).ok());
   EXPECT_EQ(std::distance(fs::directory_iterator(t.path()), fs::directory_iterator()), 2);
   EXPECT_FALSE(write_file_atomic(t / "no/such/dir/x.oct", a).ok());
+
+  // Names up to the 255 bytes a file name may have: the temp name is cut to
+  // fit, still a temp name, and the output gets its whole name.
+  for (size_t length : {200u, 240u, 250u, 255u}) {
+    TempDir u;
+    const std::string name = std::string(length - 4, 'y') + ".oct";
+    const auto written = write_file_atomic(u / name, a);
+    ASSERT_TRUE(written.ok()) << length << ": " << written.error().message;
+    EXPECT_EQ(read_bytes(u / name), a);
+    EXPECT_EQ(std::distance(fs::directory_iterator(u.path()), fs::directory_iterator()), 1);
+  }
 }
 
 TEST(CliWrite, TempNamesAndStaleCleanup) {

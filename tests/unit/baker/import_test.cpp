@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -187,12 +188,23 @@ TEST_F(ImportTest, RefusesPlyWhoseHeaderNeverEnds) {
   // The files that crashed (SIGSEGV) and hung the importer, in process.
   for (const char* name : {"ply_no_end_header_segv.ply", "ply_no_end_header_hang.ply"})
     expect_refused_with(std::string(OCTBAKE_SOURCE_DIR) + "/tests/hostile/" + name, "PLY header has no end_header line");
-  // A CR and trailing blanks end a line as well.
-  for (const char* end : {"end_header\r\n", "end_header  \t\n"}) {
-    const Result<Mesh> r = import_mesh(write("crlf.ply", replaced("end_header\n", end)));
+  // assimp's magic is "ply" in any case, with anything after it.
+  for (const char* magic : {"PLY\n", "Ply\n", "plyx\n"})
+    expect_refused_with(write("magic.ply", magic + header.substr(4, 60)), "PLY header has no end_header line");
+  // What assimp reads as the end of a header is one here too: a line ended
+  // by CR, LF or both; blanks before the token; a blank, form feed or NUL,
+  // or more text, after it.
+  for (const std::string end : {"end_header\r\n", "end_header  \t\n", "  end_header\n", "\tend_header\n",
+                                "end_header junk\n", "end_header\f\n"}) {
+    const Result<Mesh> r = import_mesh(write("ends.ply", replaced("end_header\n", end)));
     ASSERT_TRUE(r.ok()) << end << ": " << r.error().message;
     EXPECT_EQ(r->triangles.size(), 1u);
   }
+  std::string cr_only = header + body;
+  std::replace(cr_only.begin(), cr_only.end(), '\n', '\r');
+  const Result<Mesh> cr = import_mesh(write("cr_only.ply", cr_only));
+  ASSERT_TRUE(cr.ok()) << cr.error().message;
+  EXPECT_EQ(cr->triangles.size(), 1u);
 }
 
 TEST_F(ImportTest, JoinsExactlyIdenticalVerticesOnly) {
