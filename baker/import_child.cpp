@@ -309,8 +309,6 @@ Result<Mesh> load_mesh_in_child(const std::string& helper, const std::string& pa
     ::kill(child->pid, SIGKILL);
     while (::waitpid(child->pid, &status, 0) < 0 && errno == EINTR) {
     }
-  }
-  if (!finished) {
     char limit[32];
     std::snprintf(limit, sizeof limit, "%g", timeout_s);
     return failed(path, std::string("the importer did not finish within ") + limit + " s (see --import-timeout)");
