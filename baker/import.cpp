@@ -23,11 +23,14 @@ namespace {
 Error refuse(ErrorCode code, std::string reason) { return Error{code, std::move(reason)}; }
 
 // Assimp's messages can span lines; the CLI prints one line per failure.
+// assimp catches its own exceptions and keeps only what(): a bad_alloc's is
+// named for what it means.
 std::string one_line(std::string s) {
   for (char& ch : s)
     if (ch == '\n' || ch == '\r' || ch == '\t') ch = ' ';
   while (!s.empty() && s.back() == ' ') s.pop_back();
   while (!s.empty() && s.front() == ' ') s.erase(s.begin());
+  if (s == std::bad_alloc().what()) return "out of memory reading this file";
   return s.empty() ? std::string("unreadable or unsupported file") : s;
 }
 
@@ -248,18 +251,12 @@ Result<Mesh> import_mesh(const std::string& path, std::vector<std::string>* file
   const aiScene* scene = nullptr;
   try {
     scene = importer.ReadFile(path, aiProcess_Triangulate | aiProcess_ValidateDataStructure);
-  } catch (const std::bad_alloc&) {
-    return refuse(ErrorCode::invalid_argument, "out of memory reading this file");
   } catch (const std::exception& e) {
     return refuse(ErrorCode::invalid_argument, one_line(e.what()));
   } catch (...) {
     return refuse(ErrorCode::invalid_argument, "unreadable or unsupported file");
   }
-  if (scene == nullptr) {
-    // assimp catches its own exceptions and keeps only what() as the error.
-    const std::string reason = one_line(importer.GetErrorString());
-    return refuse(ErrorCode::invalid_argument, reason == "std::bad_alloc" ? "out of memory reading this file" : reason);
-  }
+  if (scene == nullptr) return refuse(ErrorCode::invalid_argument, one_line(importer.GetErrorString()));
   if (scene->mNumMeshes == 0 || scene->mMeshes == nullptr || scene->mRootNode == nullptr)
     return refuse(ErrorCode::invalid_argument, "empty scene (no meshes)");
 
