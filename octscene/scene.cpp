@@ -96,11 +96,14 @@ Eigen::Vector3d vec3(const json& j, const std::string& path) {
   return {a[0], a[1], a[2]};
 }
 
+constexpr const char* kOverflowsFromPosition = "too far from position (their difference overflows a double)";
+
 // A camera that can look: a view direction, not parallel to `up` (non-zero).
 bool has_view(const Camera& c) {
   if (c.look_at == c.position) return false;
-  const Eigen::Vector3d forward = (c.look_at - c.position).normalized();
-  return forward.cross(c.up.normalized()).norm() >= 1e-9;
+  // Stable: a camera 1e200 from its target (|d|^2 overflows) still looks.
+  const Eigen::Vector3d forward = (c.look_at - c.position).stableNormalized();
+  return forward.cross(c.up.stableNormalized()).norm() >= 1e-9;
 }
 
 Camera parse_camera(const json& j, const std::string& path) {
@@ -109,8 +112,9 @@ Camera parse_camera(const json& j, const std::string& path) {
   c.position = vec3(require(j, path, "position"), join(path, "position"));
   c.look_at = vec3(require(j, path, "look_at"), join(path, "look_at"));
   if (c.look_at == c.position) fail(join(path, "look_at"), "same as position");
+  if (!(c.look_at - c.position).allFinite()) fail(join(path, "look_at"), kOverflowsFromPosition);
   if (const json* v = find(j, "up")) c.up = vec3(*v, join(path, "up"));
-  if (c.up.norm() == 0 || !has_view(c)) fail(join(path, "up"), "zero or parallel to the view direction");
+  if (c.up.isZero(0) || !has_view(c)) fail(join(path, "up"), "zero or parallel to the view direction");
   if (const json* v = find(j, "fov_y_deg")) {
     c.fov_y_deg = number(*v, join(path, "fov_y_deg"));
     if (!(c.fov_y_deg > 0 && c.fov_y_deg < 180)) fail(join(path, "fov_y_deg"), "must be in (0, 180)");
@@ -150,6 +154,15 @@ std::vector<CameraKey> parse_camera_path(const json& j, const Camera& base) {
     k.position = vec3(require(j[i], path, "position"), join(path, "position"));
     k.look_at = vec3(require(j[i], path, "look_at"), join(path, "look_at"));
     if (k.look_at == k.position) fail(join(path, "look_at"), "same as position");
+    if (!(k.look_at - k.position).allFinite()) fail(join(path, "look_at"), kOverflowsFromPosition);
+    // camera_on_path interpolates from key to key.
+    if (!keys.empty()) {
+      const std::string previous = "camera_path[" + std::to_string(i - 1) + "]'s";
+      if (!(k.position - keys.back().position).allFinite())
+        fail(join(path, "position"), "too far from " + previous + " (their difference overflows a double)");
+      if (!(k.look_at - keys.back().look_at).allFinite())
+        fail(join(path, "look_at"), "too far from " + previous + " (their difference overflows a double)");
+    }
     keys.push_back(k);
     if (!has_view(camera_on_path(base, keys, k.frame)))
       fail(join(path, "look_at"), "view direction parallel to camera.up");
@@ -157,7 +170,12 @@ std::vector<CameraKey> parse_camera_path(const json& j, const Camera& base) {
   for (size_t i = 1; i < keys.size(); ++i) {
     // d(t) x up is linear in t: check the frames around its smallest norm.
     const CameraKey &k0 = keys[i - 1], &k1 = keys[i];
-    const Eigen::Vector3d d0 = k0.look_at - k0.position, d1 = k1.look_at - k1.position;
+    Eigen::Vector3d d0 = k0.look_at - k0.position, d1 = k1.look_at - k1.position;
+    // Scaled by a power of two (exact, so t keeps its bits) to largest
+    // coordinate ~1: the squares below neither over- nor underflow.
+    const int e = std::ilogb(std::max(d0.cwiseAbs().maxCoeff(), d1.cwiseAbs().maxCoeff()));
+    const auto scale = [e](double x) { return std::ldexp(x, -e); };
+    d0 = d0.unaryExpr(scale), d1 = d1.unaryExpr(scale);
     const Eigen::Vector3d up = base.up.normalized();
     const Eigen::Vector3d a = d0.cross(up), b = (d1 - d0).cross(up);
     const double t = b.squaredNorm() > 0 ? std::clamp(-a.dot(b) / b.squaredNorm(), 0.0, 1.0) : 0.0;

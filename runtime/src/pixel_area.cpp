@@ -22,6 +22,39 @@ namespace {
 using Vec2 = Eigen::Vector2d;
 using Vec3 = Eigen::Vector3d;
 
+// |v|^2 when it neither under- nor overflows (lengths 2^-450..2^450), else
+// NaN: the callers then rescale. Within that range the results keep their
+// bits (the areas, the depths and hence the logs do not move).
+double plain_squared_norm(const Vec3& v) {
+  const double n2 = v.squaredNorm();
+  return n2 >= 0x1p-900 && n2 <= 0x1p900 ? n2 : NAN;
+}
+
+// v scaled by a power of two (exact) so that its largest coordinate is in
+// [1, 2); zero for a zero or non-finite v.
+Vec3 rescaled(const Vec3& v) {
+  const double m = v.cwiseAbs().maxCoeff();
+  if (!(m > 0) || !std::isfinite(m)) return Vec3::Zero();
+  return v * std::ldexp(1.0, -std::ilogb(m));
+}
+
+// |v| for any finite v (coordinates up to 2^1000 and down to subnormal ones).
+double length(const Vec3& v) {
+  const double n2 = plain_squared_norm(v);
+  if (!std::isnan(n2)) return std::sqrt(n2);
+  const double m = v.cwiseAbs().maxCoeff();
+  if (!(m > 0) || !std::isfinite(m)) return m;
+  return std::ldexp(rescaled(v).norm(), std::ilogb(m));
+}
+
+// v / |v|, zero for zero: as v.normalized() where |v|^2 is plain.
+Vec3 unit(const Vec3& v) {
+  const double n2 = plain_squared_norm(v);
+  if (!std::isnan(n2)) return v / std::sqrt(n2);
+  const Vec3 r = rescaled(v);
+  return r.isZero(0) ? r : Vec3(r / r.norm());
+}
+
 // A face (4 corners) clipped by 5 planes gains at most one vertex per plane.
 constexpr int kMaxPolygon = 4 + 5;
 struct Polygon {
@@ -172,7 +205,7 @@ Where to_camera_space(const CameraView& v, const OrientedBox& box, CameraSpaceBo
   const Eigen::Matrix3d axes = basis * box.axes * box.half.asDiagonal();  // half-extent vectors
   // A near plane <= 0 becomes a tiny positive one so that every kept point
   // projects finitely.
-  const double scale = rel.norm() + box.half.sum();
+  const double scale = length(rel) + box.half.sum();
   b.near = std::max(camera.near_plane, 1e-12 * scale);
   const Vec3 a0 = axes.col(0), a1 = axes.col(1), a2 = axes.col(2);
   b.facing = -local;
@@ -202,9 +235,12 @@ double finite_area(double area, double full) { return std::isfinite(area) ? std:
 // position looks down -z; an up parallel to the view direction is replaced by
 // the world axis least aligned with it.
 CameraView::CameraView(const Camera& camera) : camera_(camera) {
-  Vec3 f = camera.look_at - camera.position;
-  f = f.norm() > 0 ? Vec3(f.normalized()) : Vec3(0, 0, -1);
-  Vec3 up = camera.up.norm() > 0 ? Vec3(camera.up.normalized()) : Vec3(0, 1, 0);
+  // Directions of any finite length (a camera 2^1000 from its target, or
+  // 2^-1000) are still directions.
+  Vec3 f = unit(camera.look_at - camera.position);
+  if (f.isZero(0)) f = Vec3(0, 0, -1);
+  Vec3 up = unit(camera.up);
+  if (up.isZero(0)) up = Vec3(0, 1, 0);
   Vec3 r = f.cross(up);
   if (r.norm() < 1e-9) {
     int axis = 0;
@@ -245,7 +281,7 @@ double pixel_area_lower_bound(const CameraView& view, const OrientedBox& box) {
   const double r = box.half.minCoeff();
   // pixel_area's near plane; the sphere must lie in front of it and inside
   // the four side planes (tan * z +- x >= 0), by its radius.
-  const double near = std::max(camera.near_plane, 1e-12 * (rel.norm() + box.half.sum()));
+  const double near = std::max(camera.near_plane, 1e-12 * (length(rel) + box.half.sum()));
   const double tx = view.tan_x(), ty = view.tan_y();
   const double rx = r * std::sqrt(1 + tx * tx), ry = r * std::sqrt(1 + ty * ty);
   if (!(r > 0) || c.z() - r < near || tx * c.z() + c.x() < rx || tx * c.z() - c.x() < rx || ty * c.z() + c.y() < ry ||
@@ -254,7 +290,9 @@ double pixel_area_lower_bound(const CameraView& view, const OrientedBox& box) {
   // Solid angle of the sphere, 2 pi (1 - cos a) with sin a = r / |c| (written
   // without cancellation), in pixels: the image plane at z = 1 is scaled by
   // w / (2 tan_x) and h / (2 tan_y).
-  const double s2 = r * r / c.squaredNorm();
+  const double c2 = plain_squared_norm(c);
+  const double sin_a = r / length(c);  // past the plain range: r / |c| squared, the same to rounding
+  const double s2 = std::isnan(c2) ? sin_a * sin_a : r * r / c2;
   const double solid = 2 * std::numbers::pi * s2 / (1 + std::sqrt(1 - s2));
   const double pixels = solid * (0.5 * view.width() / tx) * (0.5 * view.height() / ty);
   // Rounding of both computations is ~1e-15 relative: a wide margin.

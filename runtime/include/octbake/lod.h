@@ -21,7 +21,9 @@ struct Camera {
 // Area in pixels of the convex outline of `box` projected through `camera`:
 // only the part in front of the near plane counts, clipped to the viewport;
 // 0 when wholly outside the view; the whole viewport when the box encloses the
-// camera. Always finite and >= 0.
+// camera. Always finite and >= 0, and scale-free: scaling the camera, its
+// near plane and the box by a power of two keeps the area (coordinates up
+// to 2^1000 and down to 2^-1000).
 // Camera basis: forward = look_at - position (look_at == position looks down
 // -z); right = forward x up; an up parallel to forward (or zero) is replaced
 // by the world axis least aligned with forward. fov_y_deg is clamped into

@@ -4,6 +4,7 @@
 // log the same bytes for every thread count.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <string>
 
@@ -167,6 +168,68 @@ TEST(BundledScenes, LogsAreByteIdenticalForEveryThreadCount) {
       EXPECT_EQ(r->depth_pairs, first.depth_pairs) << file << ", threads " << threads;
     }
     EXPECT_GT(first.pair_tests, 0u) << file;
+  }
+}
+
+// The log's columns up to box_tests (frame, time, a, b, depth_a, depth_b,
+// box_tests): what does not scale with the scene.
+std::string unscaled_columns(const std::string& log) {
+  std::string out;
+  size_t start = 0;
+  while (start < log.size()) {
+    const size_t end = log.find('\n', start);
+    const std::string line = log.substr(start, end - start);
+    size_t cut = 0;
+    for (int commas = 0; commas < 7 && cut != std::string::npos; ++commas) cut = line.find(',', cut + (commas > 0));
+    out += line.substr(0, cut) + '\n';
+    if (end == std::string::npos) break;
+    start = end + 1;
+  }
+  return out;
+}
+
+// A scene scaled by a power of two (every position, velocity and object
+// scale, the camera, its path, near and far, the world box) is the same
+// scene: the same collisions at the same depths after the same box tests,
+// through the scene file too, down to 2^-1000 and up to 2^1000, where
+// squared lengths under- or overflow (a camera's view direction and pixel
+// areas once went to zero there).
+TEST(BundledScenes, ScaleFreeAtTheExtremesOfDouble) {
+  Result<ModelLibrary> library = ModelLibrary::open(baked_assets().string());
+  ASSERT_TRUE(library) << library.error().message;
+  for (const char* file : {"test1.json", "scales.json", "flythrough.json"}) {
+    const Scene scene = load_bundled(file);
+    Result<SceneModels> models = load_scene_models(scene, *library, 12);
+    ASSERT_TRUE(models) << models.error().message;
+    std::string first_log;
+    RunResult first;
+    for (const int e : {0, -1000, -600, 600, 1000}) {
+      const double k = std::ldexp(1.0, e);
+      Scene scaled = scene;
+      scaled.camera.position *= k, scaled.camera.look_at *= k;
+      scaled.camera.near_plane *= k, scaled.camera.far_plane *= k;
+      for (CameraKey& key : scaled.camera_path) key.position *= k, key.look_at *= k;
+      scaled.world.min *= k, scaled.world.max *= k;
+      for (SceneObject& o : scaled.objects) o.pose.position *= k, o.pose.scale *= k, o.velocity *= k;
+      Result<Scene> parsed = parse_scene(write_scene(scaled, scene.baked), "");
+      ASSERT_TRUE(parsed) << file << ", 2^" << e << ": " << parsed.error().message;
+      RunOptions options;  // the defaults of `octscene run`: screen LOD, separate
+      options.frames = kThreadFrames;
+      std::string log;
+      Result<RunResult> r = run_scene(*parsed, *models, options, [&](const FrameReport& f) {
+        append_log_lines(*parsed, f, log);
+      });
+      ASSERT_TRUE(r) << file << ", 2^" << e << ": " << r.error().message;
+      if (e == 0) {
+        first_log = unscaled_columns(log), first = *r;
+        continue;
+      }
+      EXPECT_TRUE(unscaled_columns(log) == first_log) << file << ": scaled by 2^" << e << ", other collisions";
+      EXPECT_EQ(r->collisions, first.collisions) << file << ", 2^" << e;
+      EXPECT_EQ(r->box_tests, first.box_tests) << file << ", 2^" << e;
+      EXPECT_EQ(r->depth_pairs, first.depth_pairs) << file << ", 2^" << e;
+    }
+    EXPECT_GT(first.collisions, 0u) << file;
   }
 }
 

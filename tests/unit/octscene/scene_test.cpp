@@ -159,6 +159,11 @@ TEST(Scene, RangeChecks) {
            {[](json& j) { j["camera"]["near"] = 0; }, "camera.near: must be > 0"},
            {[](json& j) { j["camera"]["far"] = 0.05; }, "camera.far: must be > near"},
            {[](json& j) { j["camera"]["look_at"] = {0, 10, -60}; }, "camera.look_at: same as position"},
+           {[](json& j) {
+              j["camera"]["position"] = {-1e308, 10, -60};
+              j["camera"]["look_at"] = {1e308, 0, 0};
+            },
+            "camera.look_at: too far from position (their difference overflows a double)"},
            {[](json& j) { j["world"]["max"][1] = -100; }, "world.max: must be > world.min on every axis"},
            {[](json& j) { j["world"]["depth"] = 11; }, "world.depth: must be in 0..10"},
            {[](json& j) { j["timestep"] = 0; }, "timestep: must be > 0"},
@@ -347,6 +352,22 @@ json moving_camera_scene() {
   return j;
 }
 
+// A camera 1e200 from what it looks at, or 1e-300, still looks (|d|^2 over-
+// or underflows there; the check once called such a camera's up "zero or
+// parallel to the view direction"), and so does a path between such keys.
+TEST(SceneMotion, FarAndNearCamerasStillLook) {
+  for (const double d : {1e200, 1e300, 1e-300}) {
+    json j = moving_camera_scene();
+    j["camera"]["position"] = {0, 0.5 * d, -d};
+    j["camera"]["look_at"] = {0, 0, 0};
+    j["camera_path"][0]["position"] = {d, 0.5 * d, -d};
+    j["camera_path"][1]["position"] = {-d, 0.1 * d, 0.2 * d};
+    j["camera_path"][1]["look_at"] = {0, 0, 0};
+    Result<Scene> s = parse_scene(j.dump(), "");
+    EXPECT_TRUE(s) << d << ": " << s.error().message;
+  }
+}
+
 TEST(SceneMotion, KeysParse) {
   Result<Scene> s = parse_scene(moving_camera_scene().dump(), "");
   ASSERT_TRUE(s) << s.error().message;
@@ -396,6 +417,21 @@ TEST(SceneMotion, BadKeysNameTheirPath) {
            {[](json& j) { j["camera_path"][1]["position"] = {1, 2, 3, 4}; },
             "camera_path[1].position: expected an array of 3 numbers"},
            {[](json& j) { j["camera_path"][1]["look_at"] = {30, 5, -20}; }, "camera_path[1].look_at: same as position"},
+           {[](json& j) {
+              j["camera_path"][1]["position"] = {-1.7e308, 5, -20};
+              j["camera_path"][1]["look_at"] = {1.7e308, 0, 10};
+            },
+            "camera_path[1].look_at: too far from position (their difference overflows a double)"},
+           {[](json& j) {
+              j["camera_path"][0] = {{"frame", 0}, {"position", {-1e308, 10, -60}}, {"look_at", {-1e308, 0, 0}}};
+              j["camera_path"][1] = {{"frame", 100}, {"position", {1e308, 5, -20}}, {"look_at", {1e308, 0, 10}}};
+            },
+            "camera_path[1].position: too far from camera_path[0]'s (their difference overflows a double)"},
+           {[](json& j) {
+              j["camera_path"][0] = {{"frame", 0}, {"position", {0, 10, -60}}, {"look_at", {-1e308, 0, 0}}};
+              j["camera_path"][1] = {{"frame", 100}, {"position", {0, 5, -20}}, {"look_at", {1e308, 0, 10}}};
+            },
+            "camera_path[1].look_at: too far from camera_path[0]'s (their difference overflows a double)"},
            {[](json& j) { j["camera_path"][1]["look_at"] = {30, 50, -20}; },
             "camera_path[1].look_at: view direction parallel to camera.up"},
            // Keys 0 and 1 look +z and -z: half way the view direction is zero.

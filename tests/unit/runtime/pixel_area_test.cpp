@@ -244,6 +244,34 @@ TEST(PixelArea, LowerBoundHolds) {
   EXPECT_GT(useful, cases / 20);
 }
 
+// Pixel area is a ratio of lengths: scaling the camera, the box and the near
+// plane by a power of two (exact) must not change it, nor the lower bound,
+// down to 2^-1000 and up to 2^1000, where squared lengths under- or
+// overflow (a camera 1e300 from its target once looked nowhere).
+TEST(PixelArea, ScaleFreeAtTheExtremesOfDouble) {
+  std::mt19937 rng(17);
+  int visible = 0;
+  for (int run = 0; run < 2000; ++run) {
+    const auto [cam, box] = random_view(rng, run);
+    if (cam.near_plane == 0) continue;  // a tiny positive near plane does not scale
+    const CameraView view(cam);
+    const double area = pixel_area(view, box), bound = pixel_area_lower_bound(view, box);
+    const double full = double(cam.viewport_w) * cam.viewport_h;
+    visible += area > 1;
+    for (const int e : {-100, 100, -1000, -600, 600, 1000}) {
+      const double s = std::ldexp(1.0, e);
+      Camera c = cam;
+      c.position *= s, c.look_at *= s, c.near_plane *= s;
+      OrientedBox b = box;
+      b.center *= s, b.half *= s;
+      const CameraView v(c);
+      EXPECT_NEAR(pixel_area(v, b), area, 1e-9 * full) << "run " << run << ", scale 2^" << e;
+      EXPECT_NEAR(pixel_area_lower_bound(v, b), bound, 1e-9 * full) << "run " << run << ", scale 2^" << e;
+    }
+  }
+  EXPECT_GT(visible, 100);
+}
+
 TEST(PixelArea, UpAlongTheViewDirectionStillWorks) {
   Camera cam;
   cam.position = {0, 10, 0};
