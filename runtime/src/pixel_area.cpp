@@ -22,37 +22,52 @@ namespace {
 using Vec2 = Eigen::Vector2d;
 using Vec3 = Eigen::Vector3d;
 
-// |v|^2 when it neither under- nor overflows (lengths 2^-450..2^450), else
-// NaN: the callers then rescale. Within that range the results keep their
-// bits (the areas, the depths and hence the logs do not move).
-double plain_squared_norm(const Vec3& v) {
-  const double n2 = v.squaredNorm();
-  return n2 >= 0x1p-900 && n2 <= 0x1p900 ? n2 : NAN;
+// Squared lengths in [2^-900, 2^900] (lengths 2^-450..2^450) neither under-
+// nor overflow: there the plain sums, which keep the results' bits (the areas,
+// the depths and hence the logs do not move); outside, the vector is first
+// scaled by a power of two (exact), out of line, so the common case stays
+// short.
+bool plain(double squared_norm) { return squared_norm >= 0x1p-900 && squared_norm <= 0x1p900; }
+
+// v times 2^-e, coordinate by coordinate (exact; 2^-e itself may not be a
+// double when v is subnormal).
+Vec3 times_two_to_minus(const Vec3& v, int e) {
+  return v.unaryExpr([e](double x) { return std::ldexp(x, -e); });
 }
 
-// v scaled by a power of two (exact) so that its largest coordinate is in
-// [1, 2); zero for a zero or non-finite v.
-Vec3 rescaled(const Vec3& v) {
+[[gnu::noinline, gnu::cold]] double rescaled_length(const Vec3& v) {
+  const double m = v.cwiseAbs().maxCoeff();
+  if (!(m > 0) || !std::isfinite(m)) return m;  // 0, inf or NaN
+  const int e = std::ilogb(m);
+  return std::ldexp(times_two_to_minus(v, e).norm(), e);
+}
+
+[[gnu::noinline, gnu::cold]] Vec3 rescaled_unit(const Vec3& v) {
   const double m = v.cwiseAbs().maxCoeff();
   if (!(m > 0) || !std::isfinite(m)) return Vec3::Zero();
-  return v * std::ldexp(1.0, -std::ilogb(m));
+  return times_two_to_minus(v, std::ilogb(m)).normalized();  // largest coordinate in [1, 2)
 }
 
 // |v| for any finite v (coordinates up to 2^1000 and down to subnormal ones).
 double length(const Vec3& v) {
-  const double n2 = plain_squared_norm(v);
-  if (!std::isnan(n2)) return std::sqrt(n2);
-  const double m = v.cwiseAbs().maxCoeff();
-  if (!(m > 0) || !std::isfinite(m)) return m;
-  return std::ldexp(rescaled(v).norm(), std::ilogb(m));
+  const double n2 = v.squaredNorm();
+  return plain(n2) ? std::sqrt(n2) : rescaled_length(v);
 }
 
 // v / |v|, zero for zero: as v.normalized() where |v|^2 is plain.
 Vec3 unit(const Vec3& v) {
-  const double n2 = plain_squared_norm(v);
-  if (!std::isnan(n2)) return v / std::sqrt(n2);
-  const Vec3 r = rescaled(v);
-  return r.isZero(0) ? r : Vec3(r / r.norm());
+  const double n2 = v.squaredNorm();
+  return plain(n2) ? Vec3(v / std::sqrt(n2)) : rescaled_unit(v);
+}
+
+// The near plane for a box at `rel` from the camera: a near plane <= 0
+// becomes a tiny positive one (1e-12 of the box's distance and size) so that
+// every kept point projects finitely. The length is taken only when it can
+// matter: |rel| <= its L1 norm, and the margin of 2 covers their rounding.
+[[gnu::always_inline]] inline double near_plane(double near, const Vec3& rel, const Vec3& half) {
+  const double size = half.sum();
+  if (near > 2e-12 * (rel.cwiseAbs().sum() + size)) return near;
+  return std::max(near, 1e-12 * (length(rel) + size));
 }
 
 // A face (4 corners) clipped by 5 planes gains at most one vertex per plane.
@@ -203,10 +218,7 @@ Where to_camera_space(const CameraView& v, const OrientedBox& box, CameraSpaceBo
   const Eigen::Matrix3d& basis = v.basis();
   const Vec3 center = basis * rel;
   const Eigen::Matrix3d axes = basis * box.axes * box.half.asDiagonal();  // half-extent vectors
-  // A near plane <= 0 becomes a tiny positive one so that every kept point
-  // projects finitely.
-  const double scale = length(rel) + box.half.sum();
-  b.near = std::max(camera.near_plane, 1e-12 * scale);
+  b.near = near_plane(camera.near_plane, rel, box.half);
   const Vec3 a0 = axes.col(0), a1 = axes.col(1), a2 = axes.col(2);
   b.facing = -local;
   b.half = box.half;
@@ -281,7 +293,7 @@ double pixel_area_lower_bound(const CameraView& view, const OrientedBox& box) {
   const double r = box.half.minCoeff();
   // pixel_area's near plane; the sphere must lie in front of it and inside
   // the four side planes (tan * z +- x >= 0), by its radius.
-  const double near = std::max(camera.near_plane, 1e-12 * (length(rel) + box.half.sum()));
+  const double near = near_plane(camera.near_plane, rel, box.half);
   const double tx = view.tan_x(), ty = view.tan_y();
   const double rx = r * std::sqrt(1 + tx * tx), ry = r * std::sqrt(1 + ty * ty);
   if (!(r > 0) || c.z() - r < near || tx * c.z() + c.x() < rx || tx * c.z() - c.x() < rx || ty * c.z() + c.y() < ry ||
@@ -290,9 +302,9 @@ double pixel_area_lower_bound(const CameraView& view, const OrientedBox& box) {
   // Solid angle of the sphere, 2 pi (1 - cos a) with sin a = r / |c| (written
   // without cancellation), in pixels: the image plane at z = 1 is scaled by
   // w / (2 tan_x) and h / (2 tan_y).
-  const double c2 = plain_squared_norm(c);
-  const double sin_a = r / length(c);  // past the plain range: r / |c| squared, the same to rounding
-  const double s2 = std::isnan(c2) ? sin_a * sin_a : r * r / c2;
+  const double c2 = c.squaredNorm();
+  // Past the plain range: (r / |c|)^2, the same to rounding.
+  const double s2 = plain(c2) ? r * r / c2 : (r / rescaled_length(c)) * (r / rescaled_length(c));
   const double solid = 2 * std::numbers::pi * s2 / (1 + std::sqrt(1 - s2));
   const double pixels = solid * (0.5 * view.width() / tx) * (0.5 * view.height() / ty);
   // Rounding of both computations is ~1e-15 relative: a wide margin.
