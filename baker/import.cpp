@@ -59,7 +59,10 @@ Result<bool> append_instance(const aiMesh& src, const Eigen::Matrix4d& to_world,
         if (out.positions.size() >= kUnused) return refuse(ErrorCode::invalid_argument, "too many vertices");
         const aiVector3D& p = src.mVertices[v];
         const Eigen::Vector3d local(p.x, p.y, p.z);
-        if (!finite(local)) return refuse(ErrorCode::invalid_argument, "NaN or infinite vertex coordinate");
+        // assimp reads single precision: a finite 1e300 in the file arrives as inf.
+        if (!finite(local))
+          return refuse(ErrorCode::invalid_argument,
+                        "NaN or infinite vertex coordinate (assimp reads floats: past 3.4e38 in magnitude is infinite)");
         const Eigen::Vector3d world = (to_world * local.homogeneous()).hnormalized();
         if (!finite(world)) return refuse(ErrorCode::invalid_argument, "NaN or infinite vertex coordinate after node transform");
         remap[v] = static_cast<uint32_t>(out.positions.size());

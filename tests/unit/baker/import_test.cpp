@@ -154,6 +154,9 @@ TEST_F(ImportTest, RefusesNonFiniteCoordinates) {
   std::memcpy(&inf_stl[80 + 4 + 12 + 24], floats, 4);  // third vertex finite again
   expect_refused_with(write("inf.stl", inf_stl), "NaN or infinite");
   expect_refused_with(write("nan.obj", "v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), "NaN or infinite");
+  // Finite in the file, infinite as the float assimp stores: the reason says so.
+  expect_refused_with(write("huge.obj", "v 1e300 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
+                      "NaN or infinite vertex coordinate (assimp reads floats: past 3.4e38 in magnitude is infinite)");
 }
 
 TEST_F(ImportTest, RefusesOffHeaderClaimingMoreThanTheFileHolds) {
