@@ -40,17 +40,35 @@ Rgb Raster::pixel(int x, int y) const {
 
 size_t Raster::count(PixelKind k) const { return static_cast<size_t>(std::count(kind_.begin(), kind_.end(), k)); }
 
+namespace {
+
+// v / |v|: v first scaled by a power of two to largest coordinate in [1, 2)
+// (exact, coordinate by coordinate), so |v|^2 neither over- nor underflows
+// (a camera 2^600 from its target) and the result is normalized()'s, bit for
+// bit, wherever that one did not.
+Eigen::Vector3d direction(const Eigen::Vector3d& v) {
+  const double m = v.cwiseAbs().maxCoeff();
+  if (!(m > 0) || !std::isfinite(m)) return v.normalized();
+  const int e = std::ilogb(m);
+  return v.unaryExpr([e](double x) { return std::ldexp(x, -e); }).normalized();
+}
+
+}  // namespace
+
 void Raster::set_camera(const Camera& camera) {
   eye_ = camera.position;
-  forward_ = (camera.look_at - camera.position).normalized();
-  right_ = forward_.cross(camera.up).normalized();
+  forward_ = direction(camera.look_at - camera.position);
+  right_ = direction(forward_.cross(camera.up));
   up_ = right_.cross(forward_);
   focal_ = 0.5 * height_ / std::tan(0.5 * camera.fov_y_deg * std::numbers::pi / 180.0);
-  near_ = camera.near_plane;
+  inv_unit_ = camera.near_plane > 0 && std::isnormal(camera.near_plane)
+                  ? std::ldexp(1.0, -std::ilogb(camera.near_plane))
+                  : 1.0;
+  near_ = camera.near_plane * inv_unit_;
 }
 
 Eigen::Vector3d Raster::to_camera(const Eigen::Vector3d& p) const {
-  const Eigen::Vector3d d = p - eye_;
+  const Eigen::Vector3d d = (p - eye_) * inv_unit_;
   return {d.dot(right_), d.dot(up_), d.dot(forward_)};
 }
 

@@ -70,6 +70,10 @@ class Raster {
   std::vector<PixelKind> kind_;
   Eigen::Vector3d eye_{0, 0, 0}, right_{1, 0, 0}, up_{0, 1, 0}, forward_{0, 0, 1};
   double focal_ = 1, near_ = 0.1;
+  // Camera space is in units of a power of two near the near plane (its
+  // inverse here): exact, so the pixels are the same at any scale, and the
+  // float inverse depths neither over- nor underflow for a scene at 2^±1000.
+  double inv_unit_ = 1;
 };
 
 }  // namespace octbake::scene

@@ -104,6 +104,34 @@ TEST(Raster, HiddenLinesAreFaint) {
   EXPECT_TRUE(faint_back);
 }
 
+// The same picture at any scale: the camera, its near plane and the
+// triangles scaled by 2^e give the same pixels, up to 2^1000 and down to
+// 2^-1000 (a scene at 2^200 was once drawn empty: its float inverse depths
+// underflowed to "nothing drawn").
+TEST(Raster, SamePixelsAtEveryScale) {
+  const auto draw = [](int e) {
+    const double k = std::ldexp(1.0, e);
+    Camera c = looking_down_z(3);
+    c.position = Eigen::Vector3d(0.3, 1.1, -3) * k, c.look_at = Eigen::Vector3d(0.1, 0, 0.5) * k;
+    c.near_plane *= k;
+    Raster r(120, 90, Rgb{0, 0, 0});
+    r.set_camera(c);
+    r.triangle(Eigen::Vector3d(-1, -1, 0) * k, Eigen::Vector3d(1, -1, 0.5) * k, Eigen::Vector3d(0, 1, 0) * k,
+               Rgb{250, 0, 0});
+    r.triangle(Eigen::Vector3d(-0.5, -1, -0.5) * k, Eigen::Vector3d(1.5, 0, 1) * k, Eigen::Vector3d(0, 0.5, -1) * k,
+               Rgb{0, 250, 0});
+    r.line(Eigen::Vector3d(-2, 0.2, -0.2) * k, Eigen::Vector3d(2, -0.3, 0.8) * k, Rgb{0, 0, 255}, 1.0, 0.3);
+    return r;
+  };
+  const Raster plain = draw(0);
+  ASSERT_GT(plain.count(PixelKind::surface), 200u);
+  for (const int e : {-1000, -600, -200, 200, 600, 1000}) {
+    const Raster scaled = draw(e);
+    EXPECT_TRUE(scaled.encode_png() == plain.encode_png()) << "scaled by 2^" << e;
+    EXPECT_EQ(scaled.count(PixelKind::surface), plain.count(PixelKind::surface)) << "scaled by 2^" << e;
+  }
+}
+
 TEST(Raster, PngDecodesToTheSamePixels) {
   Raster r(37, 23, Rgb{10, 20, 30});
   r.fill_rect(3, 4, 10, 5, Rgb{200, 100, 50});
