@@ -1,6 +1,7 @@
 // Ray cast and overlap queries against brute force over every object's leaf
-// boxes at its current depth, at random rotations, scales 1e-4..1e4 and
-// offsets up to 1e7.
+// boxes at its current depth, at random rotations, scales 1e-4..1e4 (times 1,
+// 2^600 or 2^-600, where squared lengths over- or underflow) and offsets up
+// to 1e7 (times the same).
 #include <gtest/gtest.h>
 
 #include <set>
@@ -14,6 +15,10 @@ using test::below;
 using test::kWork;
 using test::uniform;
 
+// A third of the scenes each: plain, and scaled past where |v|^2 over- or
+// underflows a double (the brute force below takes stable norms for them).
+constexpr int kExponents[3] = {0, 600, -600};
+
 struct Scene {
   std::vector<ObjectTree> trees;
   std::unique_ptr<CollisionWorld> world;
@@ -25,8 +30,9 @@ struct Scene {
 
 Scene make_scene(std::mt19937& rng, const std::vector<ObjectTree>& trees) {
   Scene s;
-  s.scale = std::pow(10.0, uniform(rng, -4, 4));
-  s.offset = below(rng, 2) ? Eigen::Vector3d::Zero() : Eigen::Vector3d(1e7, -1e7, 0.5e7);
+  const double k = std::ldexp(1.0, kExponents[below(rng, 3)]);
+  s.scale = std::pow(10.0, uniform(rng, -4, 4)) * k;
+  s.offset = below(rng, 2) ? Eigen::Vector3d::Zero() : Eigen::Vector3d(Eigen::Vector3d(1e7, -1e7, 0.5e7) * k);
   CollisionSettings cs;
   cs.bounds = {s.offset.array() - 100 * s.scale, s.offset.array() + 100 * s.scale};
   cs.world_depth = 2;
@@ -72,8 +78,8 @@ TEST(CollisionWorldQuery, RayCastMatchesBruteForceOverLeafBoxes) {
     for (int r = 0; r < 20; ++r) {
       const Eigen::Vector3d origin = s.offset + test::random_point(rng, -60, 60) * s.scale;
       const Eigen::Vector3d target = near_leaf(rng, s, 6);
-      const Eigen::Vector3d dir = (target - origin).normalized();
-      const double max_t = below(rng, 4) == 0 ? (target - origin).norm() * 0.8 : 1e3 * s.scale;
+      const Eigen::Vector3d dir = (target - origin).stableNormalized();
+      const double max_t = below(rng, 4) == 0 ? (target - origin).stableNorm() * 0.8 : 1e3 * s.scale;
       // Brute force: nearest entry into any leaf (exact and inflated by tol).
       double exact = INFINITY, loose = INFINITY;
       for (size_t i = 0; i < s.handles.size(); ++i) {
@@ -140,7 +146,7 @@ TEST(CollisionWorldQuery, OverlapBoxAndSphereMatchBruteForceOverLeafBoxes) {
           const double o = test::sat_overlap(b, qbox);
           box_exact |= o >= 0, box_loose |= o >= -tol;
           const Eigen::Vector3d local = b.axes.transpose() * (c - b.center);
-          const double dist = (local - local.cwiseMax(-b.half).cwiseMin(b.half)).norm();
+          const double dist = (local - local.cwiseMax(-b.half).cwiseMin(b.half)).stableNorm();
           sphere_exact |= dist <= r, sphere_loose |= dist <= r + tol;
         }
         const bool in_box = std::count(got_box.begin(), got_box.end(), s.handles[i]) > 0;
@@ -191,8 +197,9 @@ Pose random_pose(std::mt19937& rng, const BigScene& s) {
 
 BigScene make_big_scene(std::mt19937& rng, const std::vector<ObjectTree>& trees, int objects) {
   BigScene s;
-  s.scale = std::pow(10.0, uniform(rng, -4, 4));
-  s.offset = below(rng, 2) ? Eigen::Vector3d::Zero() : Eigen::Vector3d(1e7, -1e7, 0.5e7);
+  const double k = std::ldexp(1.0, kExponents[below(rng, 3)]);
+  s.scale = std::pow(10.0, uniform(rng, -4, 4)) * k;
+  s.offset = below(rng, 2) ? Eigen::Vector3d::Zero() : Eigen::Vector3d(Eigen::Vector3d(1e7, -1e7, 0.5e7) * k);
   CollisionSettings cs;
   cs.bounds = {s.offset.array() - 100 * s.scale, s.offset.array() + 100 * s.scale};
   cs.world_depth = int(below(rng, 7));
