@@ -96,7 +96,10 @@ Eigen::Vector3d vec3(const json& j, const std::string& path) {
   return {a[0], a[1], a[2]};
 }
 
-constexpr const char* kOverflowsFromPosition = "too far from position (their difference overflows a double)";
+// The reason for a point whose difference from `other` overflows.
+std::string too_far_from(const std::string& other) {
+  return "too far from " + other + " (their difference overflows a double)";
+}
 
 // A camera that can look: a view direction, not parallel to `up` (non-zero).
 bool has_view(const Camera& c) {
@@ -112,7 +115,7 @@ Camera parse_camera(const json& j, const std::string& path) {
   c.position = vec3(require(j, path, "position"), join(path, "position"));
   c.look_at = vec3(require(j, path, "look_at"), join(path, "look_at"));
   if (c.look_at == c.position) fail(join(path, "look_at"), "same as position");
-  if (!(c.look_at - c.position).allFinite()) fail(join(path, "look_at"), kOverflowsFromPosition);
+  if (!(c.look_at - c.position).allFinite()) fail(join(path, "look_at"), too_far_from("position"));
   if (const json* v = find(j, "up")) c.up = vec3(*v, join(path, "up"));
   if (c.up.isZero(0) || !has_view(c)) fail(join(path, "up"), "zero or parallel to the view direction");
   if (const json* v = find(j, "fov_y_deg")) {
@@ -154,14 +157,12 @@ std::vector<CameraKey> parse_camera_path(const json& j, const Camera& base) {
     k.position = vec3(require(j[i], path, "position"), join(path, "position"));
     k.look_at = vec3(require(j[i], path, "look_at"), join(path, "look_at"));
     if (k.look_at == k.position) fail(join(path, "look_at"), "same as position");
-    if (!(k.look_at - k.position).allFinite()) fail(join(path, "look_at"), kOverflowsFromPosition);
+    if (!(k.look_at - k.position).allFinite()) fail(join(path, "look_at"), too_far_from("position"));
     // camera_on_path interpolates from key to key.
     if (!keys.empty()) {
-      const std::string previous = "camera_path[" + std::to_string(i - 1) + "]'s";
-      if (!(k.position - keys.back().position).allFinite())
-        fail(join(path, "position"), "too far from " + previous + " (their difference overflows a double)");
-      if (!(k.look_at - keys.back().look_at).allFinite())
-        fail(join(path, "look_at"), "too far from " + previous + " (their difference overflows a double)");
+      const std::string previous = index("camera_path", i - 1) + "'s";
+      if (!(k.position - keys.back().position).allFinite()) fail(join(path, "position"), too_far_from(previous));
+      if (!(k.look_at - keys.back().look_at).allFinite()) fail(join(path, "look_at"), too_far_from(previous));
     }
     keys.push_back(k);
     if (!has_view(camera_on_path(base, keys, k.frame)))

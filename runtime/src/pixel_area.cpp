@@ -303,8 +303,13 @@ double pixel_area_lower_bound(const CameraView& view, const OrientedBox& box) {
   // without cancellation), in pixels: the image plane at z = 1 is scaled by
   // w / (2 tan_x) and h / (2 tan_y).
   const double c2 = c.squaredNorm();
-  // Past the plain range: (r / |c|)^2, the same to rounding.
-  const double s2 = plain(c2) ? r * r / c2 : (r / rescaled_length(c)) * (r / rescaled_length(c));
+  double s2;
+  if (plain(c2)) {
+    s2 = r * r / c2;
+  } else {  // (r / |c|)^2, the same to rounding
+    const double sin_a = r / rescaled_length(c);
+    s2 = sin_a * sin_a;
+  }
   const double solid = 2 * std::numbers::pi * s2 / (1 + std::sqrt(1 - s2));
   const double pixels = solid * (0.5 * view.width() / tx) * (0.5 * view.height() / ty);
   // Rounding of both computations is ~1e-15 relative: a wide margin.
