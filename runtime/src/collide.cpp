@@ -1249,12 +1249,12 @@ PairTest run_portable(const Job& job) {
 }
 #ifdef OCTBAKE_X86_KERNELS
 // Both return with the upper halves of the vector registers cleared, on every
-// path, by an explicit vzeroupper. GCC 12 skips its own before the call to
-// some_leaf (it knows that function uses no vector register) and then also on
-// the exit that follows it, so the caller's SSE code ran with dirty upper
-// halves: on Intel cores each SSE instruction then waits to merge them, which
-// made every pair test through the containment early out ~100 ns slower
-// (small-on-large pairs slower than the portable build; bench_pair).
+// path, by an explicit vzeroupper. GCC 12 emits none before the call to
+// some_leaf (a function of this file that uses no vector register) and none
+// on the exit after it, so the caller's SSE code ran with dirty upper halves,
+// which on Intel cores it must merge: every pair test through the containment
+// early out took ~150 ns longer (small-on-large pairs slower than in the
+// portable build; bench_pair).
 template <bool kAll>
 [[gnu::target("avx2,fma"), gnu::flatten]] PairTest run_avx2(const Job& job) {
   const PairTest result = run_pair<Avx2, kAll>(job);
