@@ -5,10 +5,16 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
+#include <string>
 #include <random>
 #include <tuple>
 
 #include "octbake/collide.h"
+
+#if defined(__x86_64__)
+#include <cpuid.h>
+#endif
 
 #include "seeded_random.h"
 
@@ -349,6 +355,79 @@ TEST(Collide, RootsApartOnlyWhereCollideMissesAtItsRoot) {
   std::printf("apart %d of %d, left to collide() within the margin %d\n", apart, runs, knife_edge);
   EXPECT_EQ(clear, 0);
 }
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+// XINUSE (XGETBV with ECX = 1, Intel SDM vol. 1, 13.6), where the CPU has it:
+// bit 2 is set while the YMM registers' upper halves are not all zero, bit 6
+// likewise for the ZMM registers' upper 256 bits.
+std::optional<uint64_t> vector_state_in_use() {
+  unsigned a, b, c, d;
+  if (!__get_cpuid(1, &a, &b, &c, &d) || !(c & bit_OSXSAVE)) return std::nullopt;
+  if (!__get_cpuid_count(0xD, 1, &a, &b, &c, &d) || !(a & (1u << 2))) return std::nullopt;  // XGETBV with ECX = 1
+  uint32_t lo, hi;
+  asm volatile("xgetbv" : "=a"(lo), "=d"(hi) : "c"(1));
+  return uint64_t(lo) | uint64_t(hi) << 32;
+}
+constexpr uint64_t kUpperHalves = (1u << 2) | (1u << 6);
+
+// Plain functions with the instruction in asm: one compiled for AVX would get
+// a vzeroupper before its return from the compiler.
+[[gnu::noinline]] void dirty_upper_halves() { asm volatile("vpcmpeqd %%ymm15, %%ymm15, %%ymm15" ::: "xmm15"); }
+[[gnu::noinline]] void clear_upper_halves() { asm volatile("vzeroupper"); }
+
+// The AVX builds of the pair test return with the vector registers' upper
+// halves clear on every path. Left dirty, the caller's SSE code (the app's
+// too) must merge them on Intel cores: the containment early out once left
+// them so (GCC 12 emitted no vzeroupper on that way out), which made those
+// pair tests about twice as slow.
+TEST(Collide, AvxKernelsReturnWithTheUpperHalvesClear) {
+  if (!vector_state_in_use() || !use_box_kernel(BoxKernel::avx2)) GTEST_SKIP() << "no AVX2 or no XGETBV with ECX = 1";
+  ASSERT_TRUE(use_box_kernel(BoxKernel::best));
+  // The reading is trusted only where it follows the state both ways.
+  dirty_upper_halves();
+  const bool seen_dirty = (*vector_state_in_use() & kUpperHalves) != 0;
+  clear_upper_halves();
+  const bool seen_clear = (*vector_state_in_use() & kUpperHalves) == 0;
+  if (!seen_dirty || !seen_clear) GTEST_SKIP() << "XINUSE does not follow the upper halves here";
+
+  // collide and collide_all, each entered with the upper halves dirty.
+  const auto check = [](const PlacedTree& a, const PlacedTree& b, const std::string& what) {
+    dirty_upper_halves();
+    const PairTest r = collide(a, b);
+    const uint64_t after_collide = *vector_state_in_use();
+    std::vector<LeafPair> leaves;
+    dirty_upper_halves();
+    collide_all(a, b, leaves);
+    const uint64_t after_collide_all = *vector_state_in_use();
+    EXPECT_EQ(after_collide & kUpperHalves, 0u) << "collide, " << what;
+    EXPECT_EQ(after_collide_all & kUpperHalves, 0u) << "collide_all, " << what;
+    return r;
+  };
+  // A small tree inside one leaf of a large one: the containment early out
+  // (the roots, A's 8 children, then one test for the whole small tree).
+  // Then random pairs. Every AVX build the CPU runs.
+  const ObjectTree large = full_tree(kCentred, 1), small = full_tree(kUnit, 3);
+  const PlacedTree outer{&large, at({0, 0, 0}), 1};
+  const PlacedTree inner{&small, at({0.3, 0.4, 0.2}, Eigen::Quaterniond::Identity(), 0.01), 3};
+  for (const BoxKernel k : {BoxKernel::avx2, BoxKernel::avx512}) {
+    if (!use_box_kernel(k)) continue;
+    const std::string name = k == BoxKernel::avx2 ? "avx2" : "avx512";
+    const PairTest early_out = check(outer, inner, name + ", small inside a leaf");
+    EXPECT_TRUE(early_out.hit);
+    EXPECT_EQ(early_out.box_tests, 10u) << name;
+    std::mt19937 rng(23);
+    for (int run = 0; run < 200; ++run) {
+      const int depth_a = int(rng() % 4), depth_b = int(rng() % 4);
+      const ObjectTree ta = random_tree(rng, depth_a), tb = random_tree(rng, depth_b);
+      const double scale_b = std::pow(10.0, -2 + 2 * uniform01(rng));
+      check({&ta, at({uniform01(rng) - 0.5, 0, 0}, random_rotation(rng)), depth_a},
+            {&tb, at({0, uniform01(rng) - 0.5, 0}, random_rotation(rng), scale_b), depth_b},
+            name + ", run " + std::to_string(run));
+    }
+  }
+  ASSERT_TRUE(use_box_kernel(BoxKernel::best));
+}
+#endif
 
 }  // namespace
 }  // namespace octbake
