@@ -6,8 +6,8 @@
 #include <cmath>
 #include <numbers>
 #include <optional>
-#include <string>
 #include <random>
+#include <string>
 #include <tuple>
 
 #include "octbake/collide.h"

@@ -19,6 +19,14 @@ using test::uniform;
 // underflows a double (the brute force below takes stable norms for them).
 constexpr int kExponents[3] = {0, 600, -600};
 
+// A scene's scale and offset: one of kExponents, a scale 1e-4..1e4 times
+// 2^that, and the origin or (1e7, -1e7, 0.5e7) times the same.
+void random_placement(std::mt19937& rng, double& scale, Eigen::Vector3d& offset) {
+  const double k = std::ldexp(1.0, kExponents[below(rng, 3)]);
+  scale = std::pow(10.0, uniform(rng, -4, 4)) * k;
+  offset = below(rng, 2) ? Eigen::Vector3d::Zero() : Eigen::Vector3d(1e7 * k, -1e7 * k, 0.5e7 * k);
+}
+
 struct Scene {
   std::vector<ObjectTree> trees;
   std::unique_ptr<CollisionWorld> world;
@@ -30,9 +38,7 @@ struct Scene {
 
 Scene make_scene(std::mt19937& rng, const std::vector<ObjectTree>& trees) {
   Scene s;
-  const double k = std::ldexp(1.0, kExponents[below(rng, 3)]);
-  s.scale = std::pow(10.0, uniform(rng, -4, 4)) * k;
-  s.offset = below(rng, 2) ? Eigen::Vector3d::Zero() : Eigen::Vector3d(Eigen::Vector3d(1e7, -1e7, 0.5e7) * k);
+  random_placement(rng, s.scale, s.offset);
   CollisionSettings cs;
   cs.bounds = {s.offset.array() - 100 * s.scale, s.offset.array() + 100 * s.scale};
   cs.world_depth = 2;
@@ -197,9 +203,7 @@ Pose random_pose(std::mt19937& rng, const BigScene& s) {
 
 BigScene make_big_scene(std::mt19937& rng, const std::vector<ObjectTree>& trees, int objects) {
   BigScene s;
-  const double k = std::ldexp(1.0, kExponents[below(rng, 3)]);
-  s.scale = std::pow(10.0, uniform(rng, -4, 4)) * k;
-  s.offset = below(rng, 2) ? Eigen::Vector3d::Zero() : Eigen::Vector3d(Eigen::Vector3d(1e7, -1e7, 0.5e7) * k);
+  random_placement(rng, s.scale, s.offset);
   CollisionSettings cs;
   cs.bounds = {s.offset.array() - 100 * s.scale, s.offset.array() + 100 * s.scale};
   cs.world_depth = int(below(rng, 7));
