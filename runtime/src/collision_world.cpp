@@ -411,16 +411,15 @@ Result<std::unique_ptr<CollisionWorld>> CollisionWorld::make(CollisionSettings s
 Status CollisionWorld::check(ObjectHandle h) const {
   if (h.world != id_) return bad("handle: belongs to another CollisionWorld (or was never issued)");
   if (h.slot >= slots_.size() || h.generation == 0) return bad("handle: no such object");
-  const Slot& s = slots_[h.slot];
-  if (!s.live || s.generation != h.generation) return bad("handle: object was destroyed");
+  if (live_generation_[h.slot] != h.generation) return bad("handle: object was destroyed");
   return std::monostate{};
 }
 
 bool CollisionWorld::alive(ObjectHandle h) const { return valid(h); }
 
 std::optional<ObjectHandle> CollisionWorld::handle_at(uint32_t slot) const {
-  if (slot >= slots_.size() || !slots_[slot].live) return std::nullopt;
-  return ObjectHandle{slot, slots_[slot].generation, id_};
+  if (slot >= slots_.size() || !live(slot)) return std::nullopt;
+  return ObjectHandle{slot, live_generation_[slot], id_};
 }
 
 const ObjectTree& CollisionWorld::tree_of(const Slot& s) const {
@@ -483,6 +482,7 @@ Result<ObjectHandle> CollisionWorld::create(TreeSource source, const Pose& pose)
   } else {
     i = uint32_t(slots_.size());
     slots_.emplace_back();
+    live_generation_.push_back(0);
     cell_changed_.push_back(0);
     boxes_.emplace_back();
     roots_.emplace_back();
@@ -492,9 +492,8 @@ Result<ObjectHandle> CollisionWorld::create(TreeSource source, const Pose& pose)
   // A slot destroyed since the last commit is still listed: list it once.
   const bool listed = s.listed;
   s = Slot{};
-  s.generation = generation;
+  s.generation = live_generation_[i] = generation;
   s.source = source;
-  s.live = true;
   s.pose = pose;
   set_offset(i);
   place_box(i);
@@ -510,7 +509,7 @@ Status CollisionWorld::destroy(ObjectHandle h) {
   if (Status st = check(h); !st) return st;
   Slot& s = slots_[h.slot];
   tree_.remove(h.slot);
-  s.live = false;
+  live_generation_[h.slot] = 0;
   s.tree_dirty = false;  // a stale entry in dirty_ is skipped
   free_slots_.push_back(h.slot);
   --live_;
@@ -753,8 +752,8 @@ uint64_t CollisionWorld::compute_areas(Stale stale, Computed computed, double* r
     uint64_t c = 0;
     double lo = std::numeric_limits<double>::infinity(), hi = -lo;
     for (size_t i = b; i < e; ++i) {
+      if (!live(uint32_t(i))) continue;
       Slot& s = slots_[i];
-      if (!s.live) continue;
       if (stale(uint32_t(i))) {
         s.area = pixel_area(view_, root_box(uint32_t(i)));
         computed(s);
@@ -778,7 +777,7 @@ int CollisionWorld::depth_in_range(const Slot& s, double a_min, double a_max) co
 void CollisionWorld::set_depths_from(const double (&range)[2]) {
   const auto depths = [&](size_t b, size_t e) {
     for (size_t i = b; i < e; ++i)
-      if (slots_[i].live) slots_[i].depth = depth_in_range(slots_[i], range[0], range[1]);
+      if (live(uint32_t(i))) slots_[i].depth = depth_in_range(slots_[i], range[0], range[1]);
   };
   run_parallel(slots_.size(), kAreaGrain, range_task(depths));
 }
@@ -881,7 +880,7 @@ void CollisionWorld::commit_poses() {
       Slot& s = slots_[i];
       move_flags_[k] = kUnmoved;
       s.listed = false;
-      if (!s.live || !s.tree_dirty) continue;  // destroyed since
+      if (!live(i) || !s.tree_dirty) continue;  // destroyed since
       s.tree_dirty = false;
       ranges_[k] = tree_.cell_range(boxes_[i]);
       if (tree_.needs_update(i, ranges_[k])) move_flags_[k] = kMoved;
@@ -1175,7 +1174,7 @@ Result<std::optional<RayHit>> CollisionWorld::ray_cast_scan(const Eigen::Vector3
   std::optional<RayHit> best;
   double best_t = max_distance;
   for (uint32_t i = 0; i < slots_.size(); ++i) {
-    if (!slots_[i].live) continue;
+    if (!live(i)) continue;
     const double t_box = ray_box(origin, dir, boxes_[i], 0, best_t);
     if (t_box < 0) continue;
     if (settings_.area_refresh == AreaRefresh::on_demand) refresh_depth(i);
@@ -1232,7 +1231,7 @@ Result<std::optional<RayHit>> CollisionWorld::ray_cast(const Eigen::Vector3d& or
   };
   // Objects moved since the last commit: their tree entries are stale.
   for (uint32_t i : dirty_)
-    if (slots_[i].live && slots_[i].tree_dirty && once(i)) consider(i);
+    if (live(i) && slots_[i].tree_dirty && once(i)) consider(i);
   for (uint32_t i : tree_.overflow_ids())
     if (!slots_[i].tree_dirty && once(i)) consider(i);
   WorldTree::RayWalk walk(tree_, origin, dir, max_distance);
@@ -1321,7 +1320,7 @@ void CollisionWorld::query_candidates(const Aabb& box) {
     if (!slots_[i].tree_dirty) query_ids_[n++] = i;
   query_ids_.resize(n);
   for (uint32_t i : dirty_)
-    if (slots_[i].live && slots_[i].tree_dirty) query_ids_.push_back(i);
+    if (live(i) && slots_[i].tree_dirty) query_ids_.push_back(i);
   // The two sets are disjoint and dirty_ names a slot once: sorting suffices.
   if (query_ids_.size() > n) std::sort(query_ids_.begin(), query_ids_.end());
 }
@@ -1345,7 +1344,7 @@ struct AllSlots {
 template <class Ids, class Leaves>
 void CollisionWorld::keep_overlapping(const Ids& ids, const Aabb& bounds, Leaves leaves, std::vector<ObjectHandle>& out) {
   for (uint32_t i : ids) {
-    if (!slots_[i].live || !overlaps(boxes_[i], bounds)) continue;
+    if (!live(i) || !overlaps(boxes_[i], bounds)) continue;
     if (settings_.area_refresh == AreaRefresh::on_demand) refresh_depth(i);
     if (leaves(i)) out.push_back({i, slots_[i].generation, id_});
   }

@@ -15,6 +15,8 @@ TEST(CollisionWorldThreads, ParallelDetectEqualsOneThread) {
   const uint64_t one = test::crowd_hash(4500, 6, 1, false);
   EXPECT_EQ(test::crowd_hash(4500, 6, 3, true), one);
   EXPECT_EQ(test::crowd_hash(4500, 6, 3, false), one);
+  // set_poses batches refused before each frame's own.
+  EXPECT_EQ(test::crowd_hash(4500, 6, 3, true, nullptr, LodPolicy::screen, AreaRefresh::on_demand, true), one);
 }
 
 // The passes over every object's area: thesis LOD (its global A_min, A_max)

@@ -32,6 +32,23 @@ TEST(CollisionWorldBatch, SetPosesAndThreadsGiveTheSetPoseLoopsResults) {
   EXPECT_GT(backwards.calls, 0);
 }
 
+// A refused set_poses changes nothing: the next frames' contacts, stats
+// (area computations, box tests) and bounds are those of a run that never
+// saw it, on every thread count and executor.
+TEST(CollisionWorldBatch, RefusedBatchesChangeNothing) {
+  const int frames = 2 + 2 * kWork;
+  const uint64_t reference = test::crowd_hash(kCrowd, frames, 1, true);
+  for (int threads : {1, 2, 3}) {
+    EXPECT_EQ(test::crowd_hash(kCrowd, frames, threads, true, nullptr, LodPolicy::screen, AreaRefresh::on_demand, true),
+              reference)
+        << threads << " threads";
+  }
+  Backwards backwards;
+  EXPECT_EQ(
+      test::crowd_hash(kCrowd, frames, 1, true, &backwards, LodPolicy::screen, AreaRefresh::on_demand, true),
+      reference);
+}
+
 class SetPosesRefusal : public ::testing::Test {
  protected:
   void SetUp() override {

@@ -3,9 +3,13 @@
 #pragma once
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
+#include <numeric>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "baked_test_util.h"
@@ -97,14 +101,61 @@ inline std::vector<OrientedBox> world_leaves(const ObjectTree& tree, const Pose&
   return out;
 }
 
+// A set_poses of every object, each moved up to 3 (cells are ~1.3 wide) and
+// a tenth turned, that the world must refuse, naming the bad item: by turns
+// a bad scale on the last item, a stale handle three quarters in, and a bad
+// position in a shuffled batch (which takes the duplicate pass first).
+inline void send_refused_batch(CollisionWorld& world, const std::vector<ObjectHandle>& handles,
+                               const std::vector<Pose>& poses, int frame, std::mt19937& rng) {
+  std::vector<ObjectHandle> h = handles;
+  std::vector<Pose> p = poses;
+  for (Pose& pose : p) {
+    pose.position += random_point(rng, -3, 3);
+    if (below(rng, 10) == 0) pose.rotation = random_rotation(rng);
+  }
+  size_t bad = h.size() - 1;
+  std::string why = "scale must be finite and > 0";
+  switch (frame % 3) {
+    case 0:
+      p[bad].scale = 0;
+      break;
+    case 1:
+      bad = h.size() * 3 / 4;
+      ++h[bad].generation;
+      why = "handle: object was destroyed";
+      break;
+    default: {
+      std::vector<size_t> order(h.size());
+      std::iota(order.begin(), order.end(), size_t{0});
+      std::shuffle(order.begin(), order.end(), rng);
+      std::vector<ObjectHandle> hs;
+      std::vector<Pose> ps;
+      for (size_t k : order) hs.push_back(h[k]), ps.push_back(p[k]);
+      h.swap(hs), p.swap(ps);
+      bad = h.size() - 2;
+      p[bad].position.y() = std::numeric_limits<double>::quiet_NaN();
+      why = "position is not finite";
+    }
+  }
+  const Status st = world.set_poses(h, p);
+  ASSERT_FALSE(st.ok());
+  EXPECT_NE(st.error().message.find("item " + std::to_string(bad) + ": "), std::string::npos) << st.error().message;
+  EXPECT_NE(st.error().message.find(why), std::string::npos) << st.error().message;
+}
+
 // A crowd of `n` objects (4 random trees) in a cube, for `frames` frames: a
-// third move each frame (a tenth of them turn), the camera moves, and every
+// third move each frame (a tenth of them turn), the camera moves (two frames
+// in three), and every
 // 4th frame a few are destroyed and created again (their slots reused).
 // Poses go in by one set_poses (batch) or a set_pose loop. Returns a hash of
-// every frame's contacts (all fields) and stats, for comparing runs.
+// every frame's contacts (all fields) and stats, for comparing runs. With
+// `refused_batches`, each frame's poses follow a set_poses that must be
+// refused (a bad pose or handle late in a batch that moves every object, in
+// handle order or shuffled): the hash must not change.
 inline uint64_t crowd_hash(int n, int frames, int threads, bool batch, Executor* executor = nullptr,
-                           LodPolicy policy = LodPolicy::screen, AreaRefresh refresh = AreaRefresh::on_demand) {
-  std::mt19937 rng(11);
+                           LodPolicy policy = LodPolicy::screen, AreaRefresh refresh = AreaRefresh::on_demand,
+                           bool refused_batches = false) {
+  std::mt19937 rng(11), refused_rng(13);
   const std::vector<ObjectTree> trees = random_trees(rng, 4);
   const double side = 2.5 * std::cbrt(double(n));
   CollisionSettings s;
@@ -137,6 +188,7 @@ inline uint64_t crowd_hash(int n, int frames, int threads, bool batch, Executor*
   };
   std::vector<Contact> contacts;
   uint64_t total_contacts = 0;
+  Eigen::Vector3d camera_jitter = Eigen::Vector3d::Zero();
   for (int f = 0; f < frames; ++f) {
     for (size_t i = 0; i < poses.size(); ++i) {
       if (below(rng, 3) != 0) continue;
@@ -150,13 +202,16 @@ inline uint64_t crowd_hash(int n, int frames, int threads, bool batch, Executor*
         poses[i] = random_pose();
         handles[i] = world.create(TreeSource::fixed(&trees[i % trees.size()]), poses[i]).value();
       }
+    if (refused_batches) send_refused_batch(world, handles, poses, f, refused_rng);
     if (batch) {
       EXPECT_TRUE(world.set_poses(handles, poses).ok());
     } else {
       for (size_t i = 0; i < handles.size(); ++i) EXPECT_TRUE(world.set_pose(handles[i], poses[i]).ok());
     }
+    // The camera stays put one frame in three: areas then stay current.
+    if (f % 3 != 2) camera_jitter = random_point(rng, -1, 1);
     Camera camera;
-    camera.position = Eigen::Vector3d(side / 2, side / 2, -side) + random_point(rng, -1, 1);
+    camera.position = Eigen::Vector3d(side / 2, side / 2, -side) + camera_jitter;
     camera.look_at = Eigen::Vector3d::Constant(side / 2);
     world.set_camera(camera);
     const DetectStats st = world.detect(contacts);
