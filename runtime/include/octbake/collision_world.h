@@ -360,7 +360,7 @@ class OCTBAKE_API CollisionWorld {
  private:
   friend class World;  // runs its per-object motion with run_parallel
 
-  // Hot first: set_pose reads the handle check and the pose (one cache line).
+  // Hot first: set_pose reads the flags and the pose.
   struct alignas(64) Slot {
     uint32_t generation = 0;  // the last issued: its object's while live (see live_generation_)
     bool tree_dirty = false;  // WorldTree entry stale: its cells are not those of `box`
@@ -426,8 +426,9 @@ class OCTBAKE_API CollisionWorld {
   WorldTree tree_;
   std::vector<Slot> slots_;
   // Per slot: its live object's generation, 0 when it has none. Apart from
-  // the slots so that handle checks (set_poses checks every item) read 4
-  // bytes an object, not a slot's cache line: a tenth of a 10k-object frame.
+  // the slots so that handle checks (set_poses checks every item first)
+  // read 4 bytes an object, not a slot's cache line (one thread, 10k
+  // objects: 505 -> 461 us a frame).
   std::vector<uint32_t> live_generation_;
   std::vector<Aabb> boxes_;  // per slot: world AABB (offset + position, padded); hot in the pair loop
   std::vector<PlacedRoot> roots_;  // per slot: the root box less the position (roots_apart)

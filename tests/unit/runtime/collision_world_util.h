@@ -144,9 +144,9 @@ inline void send_refused_batch(CollisionWorld& world, const std::vector<ObjectHa
 }
 
 // A crowd of `n` objects (4 random trees) in a cube, for `frames` frames: a
-// third move each frame (a tenth of them turn), the camera moves (two frames
-// in three), and every
-// 4th frame a few are destroyed and created again (their slots reused).
+// third move each frame (a tenth of them turn), the camera moves two frames
+// in three, and every 4th frame a few are destroyed and created again (their
+// slots reused).
 // Poses go in by one set_poses (batch) or a set_pose loop. Returns a hash of
 // every frame's contacts (all fields) and stats, for comparing runs. With
 // `refused_batches`, each frame's poses follow a set_poses that must be
