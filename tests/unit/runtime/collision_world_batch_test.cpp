@@ -3,8 +3,6 @@
 // that change nothing.
 #include <gtest/gtest.h>
 
-#include <algorithm>
-#include <numeric>
 #include <random>
 
 #include "collision_world_util.h"
@@ -109,12 +107,10 @@ TEST_F(SetPosesRefusal, DuplicateAcrossAChunkBoundary) {
 
 // Handles in any order are accepted (they take the duplicate pass).
 TEST_F(SetPosesRefusal, ShuffledBatchMovesEveryObject) {
-  std::vector<size_t> order(handles_.size());
-  std::iota(order.begin(), order.end(), size_t{0});
-  std::shuffle(order.begin(), order.end(), std::mt19937(5));
-  std::vector<ObjectHandle> handles;
-  std::vector<Pose> poses;
-  for (size_t k : order) handles.push_back(handles_[k]), poses.push_back(poses_[k]);
+  std::vector<ObjectHandle> handles = handles_;
+  std::vector<Pose> poses = poses_;
+  std::mt19937 rng(5);
+  test::shuffle_batch(handles, poses, rng);
   ASSERT_TRUE(world_->set_poses(handles, poses).ok());
   for (size_t k = 0; k < handles_.size(); ++k) EXPECT_EQ(world_->pose(handles_[k]).value().position, poses_[k].position);
   handles[1000] = handles[3];

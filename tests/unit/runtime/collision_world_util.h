@@ -101,6 +101,17 @@ inline std::vector<OrientedBox> world_leaves(const ObjectTree& tree, const Pose&
   return out;
 }
 
+// The items of a set_poses batch in a random order.
+inline void shuffle_batch(std::vector<ObjectHandle>& handles, std::vector<Pose>& poses, std::mt19937& rng) {
+  std::vector<size_t> order(handles.size());
+  std::iota(order.begin(), order.end(), size_t{0});
+  std::shuffle(order.begin(), order.end(), rng);
+  std::vector<ObjectHandle> h;
+  std::vector<Pose> p;
+  for (size_t k : order) h.push_back(handles[k]), p.push_back(poses[k]);
+  handles.swap(h), poses.swap(p);
+}
+
 // A set_poses of every object, each moved up to 3 (cells are ~1.3 wide) and
 // a tenth turned, that the world must refuse, naming the bad item: by turns
 // a bad scale on the last item, a stale handle three quarters in, and a bad
@@ -124,18 +135,11 @@ inline void send_refused_batch(CollisionWorld& world, const std::vector<ObjectHa
       ++h[bad].generation;
       why = "handle: object was destroyed";
       break;
-    default: {
-      std::vector<size_t> order(h.size());
-      std::iota(order.begin(), order.end(), size_t{0});
-      std::shuffle(order.begin(), order.end(), rng);
-      std::vector<ObjectHandle> hs;
-      std::vector<Pose> ps;
-      for (size_t k : order) hs.push_back(h[k]), ps.push_back(p[k]);
-      h.swap(hs), p.swap(ps);
+    default:
+      shuffle_batch(h, p, rng);
       bad = h.size() - 2;
       p[bad].position.y() = std::numeric_limits<double>::quiet_NaN();
       why = "position is not finite";
-    }
   }
   const Status st = world.set_poses(h, p);
   ASSERT_FALSE(st.ok());
