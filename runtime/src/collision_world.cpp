@@ -215,6 +215,16 @@ ContactEstimate estimate_contact(const OrientedBox& a, const OrientedBox& b) {
 
 // ---- ThreadPool ----
 
+namespace {
+
+void spin_pause() {
+#if defined(__x86_64__) || defined(__i386__)
+  __builtin_ia32_pause();
+#endif
+}
+
+}  // namespace
+
 int usable_cores() {
 #if defined(__linux__)
   cpu_set_t set;
@@ -264,11 +274,6 @@ struct ThreadPool::State {
   std::atomic<bool> stop{false};
   std::chrono::microseconds spin_for = kSpin;
 
-  static void pause() {
-#if defined(__x86_64__) || defined(__i386__)
-    __builtin_ia32_pause();
-#endif
-  }
   // Spins until pred() or spin_for passed; returns pred().
   template <class Pred>
   bool spin(Pred pred) const {
@@ -276,7 +281,7 @@ struct ThreadPool::State {
     for (;;) {
       for (int i = 0; i < 64; ++i) {
         if (pred()) return true;
-        pause();
+        spin_pause();
       }
       if (std::chrono::steady_clock::now() > until) return pred();
     }
@@ -372,7 +377,7 @@ void ThreadPool::parallel_for(size_t count, size_t grain, RangeTask task) {
   // Close the job, then let the workers that joined it leave before its
   // fields change (they find no chunk left).
   s.open.store(false);
-  while (s.inside.load() != 0) State::pause();
+  while (s.inside.load() != 0) spin_pause();
 }
 
 // ---- CollisionWorld ----
@@ -546,6 +551,29 @@ bool same_pose(const Pose& a, const Pose& b) { return same_frame_of(a, b) && sam
   return true;
 }
 
+// The newly dirty objects of a block of set_poses items to their WorldTree
+// cells, as commit_poses would, in one inline batch (per object, the
+// one-by-one update cost ~40% more).
+void CollisionWorld::commit_block(std::span<const ObjectHandle> handles, std::span<const uint8_t> flags) {
+  block_slots_.clear();
+  block_ranges_.clear();
+  for (size_t k = 0; k < handles.size(); ++k) {
+    if (flags[k] != kNewlyDirty) continue;
+    const uint32_t i = handles[k].slot;
+    Slot& s = slots_[i];
+    s.tree_dirty = s.listed = false;
+    cell_changed_[i] = 1;
+    block_slots_.push_back(i);
+    block_ranges_.push_back(tree_.cell_range(boxes_[i]));
+  }
+  struct Inline final : WorldTree::Parallel {
+    void for_ranges(size_t count, size_t, void (*task)(const void*, size_t, size_t), const void* ctx) override {
+      task(ctx, 0, count);
+    }
+  } inline_parts;
+  tree_.update_cells(block_slots_, block_ranges_, inline_parts, 1);
+}
+
 Status CollisionWorld::set_pose(ObjectHandle h, const Pose& pose) {
   // Statuses are built only for errors: their construction and destruction
   // were a fifth of a set_pose.
@@ -604,45 +632,58 @@ Status CollisionWorld::set_poses(std::span<const ObjectHandle> handles, std::spa
     run_parallel(n, kPoseGrain, range_task(check_claims));
   }
   if (refused.load()) return first_pose_error(handles, poses);
-  // 3. The moves, each on its own slot, in blocks that count their newly
-  // dirty; then each block lists those at its offset in dirty_: item order,
-  // as a serial pass would give, without one.
+  // 3. The moves, each on its own slot, in blocks taken in order; and the
+  //    WorldTree following them block by block, in block order, beside the
+  //    moves of later blocks. Its updates are serial and bound by cache
+  //    misses: run after all the moves, they took as long on two threads as
+  //    on one.
   if (move_flags_.size() < n) move_flags_.resize(n);
   const size_t blocks = (n + kPoseGrain - 1) / kPoseGrain;
-  if (block_listed_.size() < blocks) block_listed_.resize(blocks);
+  if (block_done_.size() < blocks) block_done_.resize(blocks);
+  std::fill_n(block_done_.begin(), blocks, 0);
+  std::atomic<size_t> next_block{0};
   std::atomic<bool> any_moved{false};
-  const auto move_blocks = [&](size_t b, size_t e) {
+  // Moves the next block no chunk has taken; false when none is left.
+  const auto move_next_block = [&] {
+    const size_t block = next_block.fetch_add(1, std::memory_order_relaxed);
+    if (block >= blocks) return false;
     bool any = false;
-    for (size_t block = b; block < e; ++block) {
-      uint32_t newly = 0;
-      for (size_t k = block * kPoseGrain; k < std::min(n, (block + 1) * kPoseGrain); ++k) {
-        const uint32_t i = handles[k].slot;
-        const bool same_frame = same_frame_of(poses[k], slots_[i].pose);
-        const uint8_t flag = same_frame && same_bits(poses[k].position, slots_[i].pose.position) ? kUnmoved
-                             : move_to(i, poses[k], same_frame)                                  ? kNewlyDirty
-                                                                                                  : kMoved;
-        move_flags_[k] = flag;  // a byte store may alias anything: counted from the local
-        newly += flag == kNewlyDirty;
-        any |= flag != kUnmoved;
-      }
-      block_listed_[block] = newly;
+    for (size_t k = block * kPoseGrain; k < std::min(n, (block + 1) * kPoseGrain); ++k) {
+      const uint32_t i = handles[k].slot;
+      const bool same_frame = same_frame_of(poses[k], slots_[i].pose);
+      const uint8_t flag = same_frame && same_bits(poses[k].position, slots_[i].pose.position) ? kUnmoved
+                           : move_to(i, poses[k], same_frame)                                  ? kNewlyDirty
+                                                                                                : kMoved;
+      move_flags_[k] = flag;
+      any |= flag != kUnmoved;
     }
     if (any) any_moved.store(true, std::memory_order_relaxed);
+    std::atomic_ref(block_done_[block]).store(1, std::memory_order_release);
+    return true;
   };
-  run_parallel(blocks, 1, range_task(move_blocks));
-  size_t listed = dirty_.size();
-  for (size_t block = 0; block < blocks; ++block) listed += std::exchange(block_listed_[block], uint32_t(listed));
-  dirty_.resize(listed);  // names each slot once: never outgrows the world
-  const auto list_blocks = [&](size_t b, size_t e) {
-    const uint8_t* flags = move_flags_.data();
-    uint32_t* list = dirty_.data();
-    for (size_t block = b; block < e; ++block) {
-      uint32_t at = block_listed_[block];
-      for (size_t k = block * kPoseGrain, end = std::min(n, k + kPoseGrain); k < end; ++k)
-        if (flags[k] == kNewlyDirty) list[at++] = handles[k].slot;
+  // Each block's newly dirty objects to their WorldTree cells, in block
+  // order, each block as soon as it is moved. While the next block is not
+  // moved yet, this moves the next one not taken, so it waits only while
+  // every block left is being moved by a running chunk, whatever order the
+  // executor runs the chunks in (inline: it moves and updates block after
+  // block, while they are in the cache).
+  const auto follow_blocks = [&] {
+    for (size_t block = 0; block < blocks; ++block) {
+      while (std::atomic_ref(block_done_[block]).load(std::memory_order_acquire) == 0)
+        if (!move_next_block()) spin_pause();
+      commit_block(handles.subspan(block * kPoseGrain, std::min(n, (block + 1) * kPoseGrain) - block * kPoseGrain),
+                   std::span(move_flags_).subspan(block * kPoseGrain));
     }
   };
-  run_parallel(blocks, 1, range_task(list_blocks));
+  // Chunk 0 follows the blocks (first, on the calling thread, for the
+  // built-in pool); every other chunk moves a block.
+  run_parallel(blocks + 1, 1, range_task([&](size_t b, size_t e) {
+                 for (size_t c = b; c < e; ++c)
+                   if (c == 0)
+                     follow_blocks();
+                   else
+                     move_next_block();
+               }));
   const bool moved = any_moved.load();
   if (moved && settings_.area_refresh == AreaRefresh::on_demand) any_stale_area_ = true;
   return std::monostate{};

@@ -243,8 +243,10 @@ class OCTBAKE_API CollisionWorld {
   // twice, or any item would be refused by set_pose; the error names the
   // first such item (ErrorCode::invalid_argument). Handles in ascending
   // slot order (as create() hands them out, without destroys) skip the pass
-  // that looks for an object named twice. Allocates only to grow its scratch
-  // with the world.
+  // that looks for an object named twice. The objects it moves into other
+  // WorldTree cells are moved there as it goes (one thread updates the tree
+  // block by block while the others move the next blocks), as commit_poses()
+  // would. Allocates only to grow its scratch with the world.
   Status set_poses(std::span<const ObjectHandle> handles, std::span<const Pose> poses);
   Result<Pose> pose(ObjectHandle h) const;
 
@@ -387,8 +389,11 @@ class OCTBAKE_API CollisionWorld {
   OrientedBox root_box(uint32_t slot) const;  // place(tree bounds, pose), from roots_
   void set_offset(uint32_t i);    // roots_[i], offset and offset_reach from slot i's tree, rotation and scale
   // Sets live slot i to a checked pose that differs from its own; true when
-  // the slot just became dirty (the caller lists it in dirty_).
+  // the slot just became dirty (set_pose lists it in dirty_, set_poses
+  // commits it with commit_block).
   bool move_to(uint32_t i, const Pose& pose, bool same_frame);  // same_frame: rotation and scale unchanged
+  // The WorldTree update of the items of a set_poses block flagged kNewlyDirty.
+  void commit_block(std::span<const ObjectHandle> handles, std::span<const uint8_t> flags);
   Status first_pose_error(std::span<const ObjectHandle> handles, std::span<const Pose> poses) const;
   void invalidate_all_areas();
   // Makes the area and depth of slot i current; returns areas computed.
@@ -454,7 +459,9 @@ class OCTBAKE_API CollisionWorld {
   // item that claimed it (duplicate check).
   enum : uint8_t { kUnmoved, kMoved, kNewlyDirty };
   std::vector<uint8_t> move_flags_;
-  std::vector<uint32_t> block_listed_;  // set_poses: per block of items, its newly dirty, then its offset in dirty_
+  std::vector<uint32_t> block_done_;  // set_poses: per block of items, 1 once moved
+  std::vector<uint32_t> block_slots_;  // commit_block: the block's newly dirty slots
+  std::vector<WorldTree::CellRange> block_ranges_;  // and their cells
   std::vector<WorldTree::CellRange> ranges_;  // commit_poses: per dirty_ entry
   std::vector<uint32_t> claim_;
   std::vector<PairResult> results_;

@@ -28,6 +28,14 @@ TEST(CollisionWorldBatch, SetPosesAndThreadsGiveTheSetPoseLoopsResults) {
   Backwards backwards;
   EXPECT_EQ(test::crowd_hash(kCrowd, frames, 1, true, &backwards), reference);
   EXPECT_GT(backwards.calls, 0);
+  // The legacy areas follow the objects whose cells changed: set_poses moves
+  // them into their cells itself, the loop leaves them to detect().
+  const uint64_t on_cell_change =
+      test::crowd_hash(kCrowd, frames, 1, false, nullptr, LodPolicy::screen, AreaRefresh::on_cell_change);
+  for (int threads : {1, 2})
+    EXPECT_EQ(test::crowd_hash(kCrowd, frames, threads, true, nullptr, LodPolicy::screen, AreaRefresh::on_cell_change),
+              on_cell_change)
+        << threads << " threads";
 }
 
 // A refused set_poses changes nothing: the next frames' contacts, stats

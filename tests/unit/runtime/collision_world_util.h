@@ -149,10 +149,13 @@ inline void send_refused_batch(CollisionWorld& world, const std::vector<ObjectHa
 
 // A crowd of `n` objects (4 random trees) in a cube, for `frames` frames: a
 // third move each frame (a tenth of them turn), the camera moves two frames
-// in three, and every 4th frame a few are destroyed and created again (their
-// slots reused).
+// in three, every 4th frame a few are destroyed and created again (their
+// slots reused) and moved before their first detect, and every 5th frame a
+// few are moved halfway first (so they wait in the WorldTree's list when the
+// frame's poses arrive).
 // Poses go in by one set_poses (batch) or a set_pose loop. Returns a hash of
-// every frame's contacts (all fields) and stats, for comparing runs. With
+// every frame's contacts (all fields), stats and WorldTree counts (cells in
+// use, reinsertions), for comparing runs. With
 // `refused_batches`, each frame's poses follow a set_poses that must be
 // refused (a bad pose or handle late in a batch that moves every object, in
 // handle order or shuffled): the hash must not change.
@@ -205,6 +208,16 @@ inline uint64_t crowd_hash(int n, int frames, int threads, bool batch, Executor*
         EXPECT_TRUE(world.destroy(handles[i]).ok());
         poses[i] = random_pose();
         handles[i] = world.create(TreeSource::fixed(&trees[i % trees.size()]), poses[i]).value();
+        poses[i].position.x() += 0.2;  // moved again before its first detect
+      }
+    // Some objects already moved this frame (listed for the WorldTree)
+    // before the frame's poses arrive.
+    if (f % 5 == 1)
+      for (int k = 0; k < 20; ++k) {
+        const size_t i = below(rng, uint32_t(handles.size()));
+        Pose midway = poses[i];
+        midway.position.y() -= 0.7;
+        EXPECT_TRUE(world.set_pose(handles[i], midway).ok());
       }
     if (refused_batches) send_refused_batch(world, handles, poses, f, refused_rng);
     if (batch) {
@@ -220,6 +233,7 @@ inline uint64_t crowd_hash(int n, int frames, int threads, bool batch, Executor*
     world.set_camera(camera);
     const DetectStats st = world.detect(contacts);
     mix(st.candidate_pairs), mix(st.box_tests), mix(st.contacts), mix(st.area_computations);
+    mix(world.world_tree().cells_in_use()), mix(world.world_tree().reinsertions());
     total_contacts += st.contacts;
     for (const Contact& c : contacts) {
       mix(c.a.slot), mix(c.a.generation), mix(c.b.slot), mix(c.b.generation), mix(c.depth_a), mix(c.depth_b);
