@@ -542,36 +542,29 @@ bool same_pose(const Pose& a, const Pose& b) { return same_frame_of(a, b) && sam
   if (settings_.area_refresh == AreaRefresh::on_demand) s.area_epoch = 0;
   if (s.tree_dirty) return false;
   // Most moves stay in the same WorldTree cells, whose entry then stays
-  // right: only a change of cells is listed for commit_poses (reading the
-  // entry here, while the slot is hot, spares commit_poses a pass over every
+  // right: only a change of cells is listed or committed (reading the entry
+  // here, while the slot is hot, spares commit_poses a pass over every
   // mover).
-  if (!tree_.needs_update(i, boxes_[i])) return false;
-  // A live slot that is not dirty was committed, so it is not listed.
-  s.tree_dirty = s.listed = true;
-  return true;
+  return tree_.needs_update(i, boxes_[i]);
 }
 
-// The newly dirty objects of a block of set_poses items to their WorldTree
-// cells, as commit_poses would, in one inline batch (per object, the
-// one-by-one update cost ~40% more).
-void CollisionWorld::commit_block(std::span<const ObjectHandle> handles, std::span<const uint8_t> flags) {
-  block_slots_.clear();
-  block_ranges_.clear();
-  for (size_t k = 0; k < handles.size(); ++k) {
-    if (flags[k] != kNewlyDirty) continue;
-    const uint32_t i = handles[k].slot;
-    Slot& s = slots_[i];
-    s.tree_dirty = s.listed = false;
-    cell_changed_[i] = 1;
-    block_slots_.push_back(i);
-    block_ranges_.push_back(tree_.cell_range(boxes_[i]));
+// set_poses' objects that change cells, to their new cells (as
+// commit_poses would) in one inline batch: per object, the one-by-one update
+// cost ~40% more.
+void CollisionWorld::commit_moves(std::span<const CellMove> moves) {
+  move_slots_.clear();
+  move_ranges_.clear();
+  for (const CellMove& m : moves) {
+    cell_changed_[m.slot] = 1;
+    move_slots_.push_back(m.slot);
+    move_ranges_.push_back(m.cells);
   }
   struct Inline final : WorldTree::Parallel {
     void for_ranges(size_t count, size_t, void (*task)(const void*, size_t, size_t), const void* ctx) override {
       task(ctx, 0, count);
     }
   } inline_parts;
-  tree_.update_cells(block_slots_, block_ranges_, inline_parts, 1);
+  tree_.update_cells(move_slots_, move_ranges_, inline_parts, 1);
 }
 
 Status CollisionWorld::set_pose(ObjectHandle h, const Pose& pose) {
@@ -585,7 +578,11 @@ Status CollisionWorld::set_pose(ObjectHandle h, const Pose& pose) {
   if (same_frame && same_bits(pose.position, now.position)) return std::monostate{};
   // The same rotation and scale as the stored pose passed pose_ok already.
   if (!(same_frame ? position_ok(pose) : pose_ok(pose))) return check_pose(pose);
-  if (move_to(h.slot, pose, same_frame)) dirty_.push_back(h.slot);
+  if (move_to(h.slot, pose, same_frame)) {
+    // A live slot that is not dirty was committed, so it is not listed.
+    slots_[h.slot].tree_dirty = slots_[h.slot].listed = true;
+    dirty_.push_back(h.slot);
+  }
   if (settings_.area_refresh == AreaRefresh::on_demand) any_stale_area_ = true;
   return std::monostate{};
 }
@@ -636,11 +633,13 @@ Status CollisionWorld::set_poses(std::span<const ObjectHandle> handles, std::spa
   //    WorldTree following them block by block, in block order, beside the
   //    moves of later blocks. Its updates are serial and bound by cache
   //    misses: run after all the moves, they took as long on two threads as
-  //    on one.
-  if (move_flags_.size() < n) move_flags_.resize(n);
+  //    on one. A block hands over only its objects that change cells, with
+  //    their cells, in its share of cell_moves_: the update then reads no
+  //    slot or box that another core has just written.
+  if (cell_moves_.size() < n) cell_moves_.resize(n);
   const size_t blocks = (n + kPoseGrain - 1) / kPoseGrain;
-  if (block_done_.size() < blocks) block_done_.resize(blocks);
-  std::fill_n(block_done_.begin(), blocks, 0);
+  if (block_moves_.size() < blocks) block_moves_.resize(blocks);
+  std::fill_n(block_moves_.begin(), blocks, kBlockNotMoved);
   std::atomic<size_t> next_block{0};
   std::atomic<bool> any_moved{false};
   // Moves the next block no chunk has taken; false when none is left.
@@ -648,20 +647,20 @@ Status CollisionWorld::set_poses(std::span<const ObjectHandle> handles, std::spa
     const size_t block = next_block.fetch_add(1, std::memory_order_relaxed);
     if (block >= blocks) return false;
     bool any = false;
+    CellMove* out = cell_moves_.data() + block * kPoseGrain;
+    uint32_t changed = 0;
     for (size_t k = block * kPoseGrain; k < std::min(n, (block + 1) * kPoseGrain); ++k) {
       const uint32_t i = handles[k].slot;
       const bool same_frame = same_frame_of(poses[k], slots_[i].pose);
-      const uint8_t flag = same_frame && same_bits(poses[k].position, slots_[i].pose.position) ? kUnmoved
-                           : move_to(i, poses[k], same_frame)                                  ? kNewlyDirty
-                                                                                                : kMoved;
-      move_flags_[k] = flag;
-      any |= flag != kUnmoved;
+      if (same_frame && same_bits(poses[k].position, slots_[i].pose.position)) continue;
+      any = true;
+      if (move_to(i, poses[k], same_frame)) out[changed++] = {i, tree_.cell_range(boxes_[i])};
     }
     if (any) any_moved.store(true, std::memory_order_relaxed);
-    std::atomic_ref(block_done_[block]).store(1, std::memory_order_release);
+    std::atomic_ref(block_moves_[block]).store(changed, std::memory_order_release);
     return true;
   };
-  // Each block's newly dirty objects to their WorldTree cells, in block
+  // Each block's objects that change cells to their new cells, in block
   // order, each block as soon as it is moved. While the next block is not
   // moved yet, this moves the next one not taken, so it waits only while
   // every block left is being moved by a running chunk, whatever order the
@@ -669,10 +668,10 @@ Status CollisionWorld::set_poses(std::span<const ObjectHandle> handles, std::spa
   // block, while they are in the cache).
   const auto follow_blocks = [&] {
     for (size_t block = 0; block < blocks; ++block) {
-      while (std::atomic_ref(block_done_[block]).load(std::memory_order_acquire) == 0)
+      uint32_t changed;
+      while ((changed = std::atomic_ref(block_moves_[block]).load(std::memory_order_acquire)) == kBlockNotMoved)
         if (!move_next_block()) spin_pause();
-      commit_block(handles.subspan(block * kPoseGrain, std::min(n, (block + 1) * kPoseGrain) - block * kPoseGrain),
-                   std::span(move_flags_).subspan(block * kPoseGrain));
+      commit_moves(std::span(cell_moves_).subspan(block * kPoseGrain, changed));
     }
   };
   // Chunk 0 follows the blocks (first, on the calling thread, for the

@@ -389,11 +389,14 @@ class OCTBAKE_API CollisionWorld {
   OrientedBox root_box(uint32_t slot) const;  // place(tree bounds, pose), from roots_
   void set_offset(uint32_t i);    // roots_[i], offset and offset_reach from slot i's tree, rotation and scale
   // Sets live slot i to a checked pose that differs from its own; true when
-  // the slot just became dirty (set_pose lists it in dirty_, set_poses
-  // commits it with commit_block).
+  // it is not listed in dirty_ and its WorldTree cells change (set_pose then
+  // lists it, set_poses commits it).
   bool move_to(uint32_t i, const Pose& pose, bool same_frame);  // same_frame: rotation and scale unchanged
-  // The WorldTree update of the items of a set_poses block flagged kNewlyDirty.
-  void commit_block(std::span<const ObjectHandle> handles, std::span<const uint8_t> flags);
+  struct CellMove {
+    uint32_t slot;
+    WorldTree::CellRange cells;
+  };
+  void commit_moves(std::span<const CellMove> moves);
   Status first_pose_error(std::span<const ObjectHandle> handles, std::span<const Pose> poses) const;
   void invalidate_all_areas();
   // Makes the area and depth of slot i current; returns areas computed.
@@ -455,15 +458,18 @@ class OCTBAKE_API CollisionWorld {
   };
   std::vector<std::pair<uint32_t, uint32_t>> pair_room_, spilled_pairs_;  // collect_pairs: the scan's room, overflow
   std::vector<uint32_t> stale_;  // objects in pairs whose depth is stale
-  // set_poses / commit_poses scratch: per item, what moved; per slot, the
-  // item that claimed it (duplicate check).
-  enum : uint8_t { kUnmoved, kMoved, kNewlyDirty };
+  // commit_poses scratch: per dirty_ entry, whether its cells change.
+  enum : uint8_t { kUnmoved, kMoved };
   std::vector<uint8_t> move_flags_;
-  std::vector<uint32_t> block_done_;  // set_poses: per block of items, 1 once moved
-  std::vector<uint32_t> block_slots_;  // commit_block: the block's newly dirty slots
-  std::vector<WorldTree::CellRange> block_ranges_;  // and their cells
+  // set_poses: per block of items, kBlockNotMoved, then how many of its
+  // objects change cells; those objects, at the block's items' offset.
+  static constexpr uint32_t kBlockNotMoved = UINT32_MAX;
+  std::vector<uint32_t> block_moves_;
+  std::vector<CellMove> cell_moves_;
+  std::vector<uint32_t> move_slots_;  // commit_moves' batch
+  std::vector<WorldTree::CellRange> move_ranges_;
   std::vector<WorldTree::CellRange> ranges_;  // commit_poses: per dirty_ entry
-  std::vector<uint32_t> claim_;
+  std::vector<uint32_t> claim_;  // set_poses: per slot, the item that claimed it (duplicate check)
   std::vector<PairResult> results_;
   // Temporal coherence: per candidate pair (slots a < b, sorted by key) the
   // leaf pair that proved its last contact, tried first next frame. Only an
