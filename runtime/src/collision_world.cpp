@@ -675,14 +675,18 @@ Status CollisionWorld::set_poses(std::span<const ObjectHandle> handles, std::spa
     }
   };
   // Chunk 0 follows the blocks (first, on the calling thread, for the
-  // built-in pool); every other chunk moves a block.
-  run_parallel(blocks + 1, 1, range_task([&](size_t b, size_t e) {
-                 for (size_t c = b; c < e; ++c)
-                   if (c == 0)
-                     follow_blocks();
-                   else
-                     move_next_block();
-               }));
+  // built-in pool); every other chunk moves a block. One block is not worth
+  // a fork.
+  if (blocks == 1)
+    follow_blocks();
+  else
+    run_parallel(blocks + 1, 1, range_task([&](size_t b, size_t e) {
+                   for (size_t c = b; c < e; ++c)
+                     if (c == 0)
+                       follow_blocks();
+                     else
+                       move_next_block();
+                 }));
   const bool moved = any_moved.load();
   if (moved && settings_.area_refresh == AreaRefresh::on_demand) any_stale_area_ = true;
   return std::monostate{};
