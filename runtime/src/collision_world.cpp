@@ -247,9 +247,9 @@ int usable_cores() {
 //
 // The chunks are split into one contiguous share per thread, which that
 // thread runs first; then it helps with the others' shares. Jobs over the
-// same items (set_poses' checks then moves, frame after frame) thus find
-// most of their data in the cache of the core that touched it last, instead
-// of pulling it from the other core's.
+// same items (set_poses' checks, frame after frame) thus find most of their
+// data in the cache of the core that touched it last, instead of pulling it
+// from the other core's.
 struct ThreadPool::State {
   static constexpr auto kSpin = std::chrono::microseconds(500), kSpinOversubscribed = std::chrono::microseconds(50);
 
