@@ -551,20 +551,14 @@ bool same_pose(const Pose& a, const Pose& b) { return same_frame_of(a, b) && sam
 // set_poses' objects that change cells, to their new cells (as
 // commit_poses would) in one inline batch: per object, the one-by-one update
 // cost ~40% more.
-void CollisionWorld::commit_moves(std::span<const CellMove> moves) {
-  move_slots_.clear();
-  move_ranges_.clear();
-  for (const CellMove& m : moves) {
-    cell_changed_[m.slot] = 1;
-    move_slots_.push_back(m.slot);
-    move_ranges_.push_back(m.cells);
-  }
+void CollisionWorld::commit_moves(std::span<const uint32_t> slots, std::span<const WorldTree::CellRange> cells) {
+  for (uint32_t i : slots) cell_changed_[i] = 1;
   struct Inline final : WorldTree::Parallel {
     void for_ranges(size_t count, size_t, void (*task)(const void*, size_t, size_t), const void* ctx) override {
       task(ctx, 0, count);
     }
   } inline_parts;
-  tree_.update_cells(move_slots_, move_ranges_, inline_parts, 1);
+  tree_.update_cells(slots, cells, inline_parts, 1);
 }
 
 Status CollisionWorld::set_pose(ObjectHandle h, const Pose& pose) {
@@ -634,9 +628,9 @@ Status CollisionWorld::set_poses(std::span<const ObjectHandle> handles, std::spa
   //    moves of later blocks. Its updates are serial and bound by cache
   //    misses: run after all the moves, they took as long on two threads as
   //    on one. A block hands over only its objects that change cells, with
-  //    their cells, in its share of cell_moves_: the update then reads no
-  //    slot or box that another core has just written.
-  if (cell_moves_.size() < n) cell_moves_.resize(n);
+  //    their cells, in its share of move_slots_ and move_cells_: the update
+  //    then reads no slot or box that another core has just written.
+  if (move_slots_.size() < n) move_slots_.resize(n), move_cells_.resize(n);
   const size_t blocks = (n + kPoseGrain - 1) / kPoseGrain;
   if (block_moves_.size() < blocks) block_moves_.resize(blocks);
   std::fill_n(block_moves_.begin(), blocks, kBlockNotMoved);
@@ -647,14 +641,18 @@ Status CollisionWorld::set_poses(std::span<const ObjectHandle> handles, std::spa
     const size_t block = next_block.fetch_add(1, std::memory_order_relaxed);
     if (block >= blocks) return false;
     bool any = false;
-    CellMove* out = cell_moves_.data() + block * kPoseGrain;
+    uint32_t* slots = move_slots_.data() + block * kPoseGrain;
+    WorldTree::CellRange* cells = move_cells_.data() + block * kPoseGrain;
     uint32_t changed = 0;
     for (size_t k = block * kPoseGrain; k < std::min(n, (block + 1) * kPoseGrain); ++k) {
       const uint32_t i = handles[k].slot;
       const bool same_frame = same_frame_of(poses[k], slots_[i].pose);
       if (same_frame && same_bits(poses[k].position, slots_[i].pose.position)) continue;
       any = true;
-      if (move_to(i, poses[k], same_frame)) out[changed++] = {i, tree_.cell_range(boxes_[i])};
+      if (move_to(i, poses[k], same_frame)) {
+        slots[changed] = i;
+        cells[changed++] = tree_.cell_range(boxes_[i]);
+      }
     }
     if (any) any_moved.store(true, std::memory_order_relaxed);
     std::atomic_ref(block_moves_[block]).store(changed, std::memory_order_release);
@@ -671,7 +669,8 @@ Status CollisionWorld::set_poses(std::span<const ObjectHandle> handles, std::spa
       uint32_t changed;
       while ((changed = std::atomic_ref(block_moves_[block]).load(std::memory_order_acquire)) == kBlockNotMoved)
         if (!move_next_block()) spin_pause();
-      commit_moves(std::span(cell_moves_).subspan(block * kPoseGrain, changed));
+      commit_moves(std::span(move_slots_).subspan(block * kPoseGrain, changed),
+                   std::span(move_cells_).subspan(block * kPoseGrain, changed));
     }
   };
   // Chunk 0 follows the blocks (first, on the calling thread, for the

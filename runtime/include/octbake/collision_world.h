@@ -392,11 +392,7 @@ class OCTBAKE_API CollisionWorld {
   // it is not listed in dirty_ and its WorldTree cells change (set_pose then
   // lists it, set_poses commits it).
   bool move_to(uint32_t i, const Pose& pose, bool same_frame);  // same_frame: rotation and scale unchanged
-  struct CellMove {
-    uint32_t slot;
-    WorldTree::CellRange cells;
-  };
-  void commit_moves(std::span<const CellMove> moves);
+  void commit_moves(std::span<const uint32_t> slots, std::span<const WorldTree::CellRange> cells);
   Status first_pose_error(std::span<const ObjectHandle> handles, std::span<const Pose> poses) const;
   void invalidate_all_areas();
   // Makes the area and depth of slot i current; returns areas computed.
@@ -462,12 +458,12 @@ class OCTBAKE_API CollisionWorld {
   enum : uint8_t { kUnmoved, kMoved };
   std::vector<uint8_t> move_flags_;
   // set_poses: per block of items, kBlockNotMoved, then how many of its
-  // objects change cells; those objects, at the block's items' offset.
+  // objects change cells; those objects and their cells, at the block's
+  // items' offset.
   static constexpr uint32_t kBlockNotMoved = UINT32_MAX;
   std::vector<uint32_t> block_moves_;
-  std::vector<CellMove> cell_moves_;
-  std::vector<uint32_t> move_slots_;  // commit_moves' batch
-  std::vector<WorldTree::CellRange> move_ranges_;
+  std::vector<uint32_t> move_slots_;
+  std::vector<WorldTree::CellRange> move_cells_;
   std::vector<WorldTree::CellRange> ranges_;  // commit_poses: per dirty_ entry
   std::vector<uint32_t> claim_;  // set_poses: per slot, the item that claimed it (duplicate check)
   std::vector<PairResult> results_;
