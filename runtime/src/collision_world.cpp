@@ -54,8 +54,6 @@ std::atomic<uint32_t> g_next_world_id{1};
 // Slot::area when the depth was decided from a lower bound (see refresh_depth).
 constexpr double kAreaNotComputed = std::numeric_limits<double>::quiet_NaN();
 
-uint64_t pair_key(const std::pair<uint32_t, uint32_t>& p) { return (uint64_t(p.first) << 32) | p.second; }
-
 Error bad(std::string why) { return Error{ErrorCode::invalid_argument, std::move(why)}; }
 
 // |q| within 1e-6 of 1, on the squared norm (no square root per set_pose).
@@ -496,7 +494,9 @@ Result<ObjectHandle> CollisionWorld::create(TreeSource source, const Pose& pose)
   const uint32_t generation = s.generation + 1 == 0 ? 1 : s.generation + 1;
   // A slot destroyed since the last commit is still listed: list it once.
   const bool listed = s.listed;
+  const uint64_t moves = s.moves + 1;  // not a pose a pair result of the slot's last object was tested on
   s = Slot{};
+  s.moves = moves;
   s.generation = live_generation_[i] = generation;
   s.source = source;
   s.pose = pose;
@@ -537,6 +537,7 @@ bool same_pose(const Pose& a, const Pose& b) { return same_frame_of(a, b) && sam
 [[gnu::always_inline]] inline bool CollisionWorld::move_to(uint32_t i, const Pose& pose, bool same_frame) {
   Slot& s = slots_[i];
   s.pose = pose;
+  ++s.moves;
   if (!same_frame) set_offset(i);  // only the position changed: the offset box stays
   place_box(i);
   if (settings_.area_refresh == AreaRefresh::on_demand) s.area_epoch = 0;
@@ -901,11 +902,26 @@ void CollisionWorld::test_pairs(size_t begin, size_t end) {
     PairResult& r = results_[k];
     if (r.apart) {
       r.test = PairTest{.hit = false, .box_tests = 1, .leaf = {}};
+      r.reused = false;
       continue;
     }
     const PlacedTree pa = placed(a), pb = placed(b);
-    r.test = settings_.coherence ? collide(pa, pb, r.cache) : collide(pa, pb);
-    if (r.test.hit) r.estimate = estimate_contact(leaf_box(pa, r.test.leaf.a), leaf_box(pb, r.test.leaf.b));
+    r.moves_a = slots_[a].moves;
+    r.moves_b = slots_[b].moves;
+    // Tested last frame on the same trees, depths and poses: the same result
+    // (collide is deterministic; a hit's leaf pair, tried first, would prove
+    // it again), so none of it is redone.
+    const PairResult* last = r.last;
+    r.reused = last && last->moves_a == r.moves_a && last->moves_b == r.moves_b && last->tested.tree_a == pa.tree &&
+               last->tested.tree_b == pb.tree && last->tested.depth_a == pa.depth && last->tested.depth_b == pb.depth;
+    if (r.reused) {
+      r.test = PairTest{.hit = last->test.hit, .box_tests = 0, .leaf = last->test.leaf};
+      if (r.test.hit) r.estimate = last->estimate;
+    } else {
+      r.test = settings_.coherence ? collide(pa, pb, r.cache) : collide(pa, pb);
+      if (r.test.hit) r.estimate = estimate_contact(leaf_box(pa, r.test.leaf.a), leaf_box(pb, r.test.leaf.b));
+    }
+    r.tested = PairCache{pa.tree, pb.tree, pa.depth, pb.depth, r.test.leaf};
   }
 }
 
@@ -1026,17 +1042,19 @@ DetectStats CollisionWorld::detect(std::vector<Contact>& out) {
   const size_t n = pairs_.size();
   stats.candidate_pairs = stats.pair_tests = n;
 
-  // 4. Last frame's proving leaf pairs, matched by a merge over sorted keys;
-  // the pairs without one whose root boxes are apart: collide() would end at
-  // its root test at any depths, so they ask for no depth (one box test each,
-  // as collide() counts it).
+  // 4. Last frame's tests (coherence), matched by a merge over sorted keys:
+  // a hit's leaf pair is tried first; the pairs without one whose root boxes
+  // are apart: collide() would end at its root test at any depths, so they
+  // ask for no depth (one box test each, as collide() counts it).
   results_.resize(n);
   {
     size_t j = 0;
     for (size_t k = 0; k < n; ++k) {
-      const uint64_t key = pair_key(pairs_[k]);
-      while (j < coherence_.size() && coherence_[j].key < key) ++j;
-      results_[k].cache = (j < coherence_.size() && coherence_[j].key == key) ? coherence_[j].cache : PairCache{};
+      while (j < last_pairs_.size() && last_pairs_[j] < pairs_[k]) ++j;
+      PairResult& r = results_[k];
+      r.last = j < last_pairs_.size() && last_pairs_[j] == pairs_[k] && !last_results_[j].apart ? &last_results_[j]
+                                                                                                : nullptr;
+      r.cache = r.last && r.last->test.hit ? r.last->tested : PairCache{};
     }
   }
   run_parallel(n, kPairGrain, range_task([this](size_t b, size_t e) { find_apart(b, e); }));
@@ -1114,6 +1132,7 @@ DetectStats CollisionWorld::detect(std::vector<Contact>& out) {
   for (size_t k = 0; k < n; ++k) {
     const PairResult& r = results_[k];
     stats.box_tests += r.test.box_tests;
+    stats.pairs_reused += r.reused;
     if (!r.test.hit) continue;
     const auto [a, b] = pairs_[k];
     Contact c;
@@ -1125,10 +1144,10 @@ DetectStats CollisionWorld::detect(std::vector<Contact>& out) {
     c.estimate = r.estimate;
     out.push_back(c);
   }
-  coherence_next_.clear();
-  for (size_t k = 0; k < n; ++k)
-    if (results_[k].cache.tree_a) coherence_next_.push_back({pair_key(pairs_[k]), results_[k].cache});
-  coherence_.swap(coherence_next_);
+  if (settings_.coherence) {
+    last_pairs_.swap(pairs_);
+    last_results_.swap(results_);
+  }
   stats.contacts = out.size();
   return stats;
 }

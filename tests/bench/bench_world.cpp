@@ -340,6 +340,67 @@ BENCHMARK(BM_Detect)
     ->Iterations(kFrames100k)
     ->Unit(benchmark::kMicrosecond);
 
+// Static scenery at rest: BM_Detect's scene (set_poses, one thread) with
+// every third object placed against the static one before it, so a third of
+// the objects rest in contact and never move. With coherence, a pair whose
+// objects kept their poses and depths reuses last frame's answer; without,
+// every pair is tested every frame. Screen LOD under the moving camera
+// changes some depths each frame (those pairs are tested again); fixed LOD
+// none.
+void BM_Resting(benchmark::State& state) {
+  Scene scene = make_scene(int(state.range(0)));
+  for (size_t i = 2; i < scene.objects.size(); i += 3)
+    scene.objects[i].pose.position = scene.objects[i - 1].pose.position + Eigen::Vector3d(0.6, 0.1, 0);
+  CollisionSettings settings = collision_settings(scene, LodPolicy(state.range(1)));
+  settings.coherence = state.range(2) != 0;
+  CollisionWorld world(settings);
+  std::vector<ObjectHandle> handles;
+  for (const ObjectDesc& o : scene.objects) handles.push_back(world.create(TreeSource::fixed(o.tree), o.pose).value());
+  AppMotion motion(scene);
+  std::vector<Contact> contacts;
+  int64_t f = 0;
+  for (; f < kWarmup; ++f) {
+    motion.at(f);
+    (void)world.set_poses(handles, motion.now);
+    world.set_camera(AppMotion::camera(scene, f));
+    world.detect(contacts);
+  }
+  DetectStats total;
+  FrameTimes times(state);
+  for (auto _ : state) {
+    state.PauseTiming();
+    motion.at(f);
+    const Camera camera = AppMotion::camera(scene, f);
+    ++f;
+    state.ResumeTiming();
+    times.start();
+    (void)world.set_poses(handles, motion.now);
+    world.set_camera(camera);
+    const DetectStats d = world.detect(contacts);
+    times.stop();
+    total.pair_tests += d.pair_tests;
+    total.pairs_reused += d.pairs_reused;
+    total.box_tests += d.box_tests;
+    total.contacts += d.contacts;
+  }
+  const double frames = double(state.iterations());
+  state.counters["frame_median_us"] = times.median();
+  state.counters["pair_tests"] = double(total.pair_tests) / frames;
+  state.counters["pairs_reused"] = double(total.pairs_reused) / frames;
+  state.counters["box_tests"] = double(total.box_tests) / frames;
+  state.counters["contacts"] = double(total.contacts) / frames;
+}
+BENCHMARK(BM_Resting)
+    ->ArgsProduct({{10'000}, {int(LodPolicy::screen), int(LodPolicy::fixed)}, {1, 0}})
+    ->ArgNames({"objects", "policy", "coherence"})
+    ->Iterations(kFrames10k)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Resting)
+    ->ArgsProduct({{100'000}, {int(LodPolicy::screen), int(LodPolicy::fixed)}, {1, 0}})
+    ->ArgNames({"objects", "policy", "coherence"})
+    ->Iterations(kFrames100k)
+    ->Unit(benchmark::kMicrosecond);
+
 // Objects coming and going: every frame a hundredth of the objects is
 // destroyed (random ones) and as many are created at random places in the
 // world, then detect() runs (one thread, app-set camera fixed). The frame

@@ -161,9 +161,12 @@ struct CollisionSettings {
   int threads = 1;
   Executor* executor = nullptr;  // not owned; must outlive the world
   // Temporal coherence: each candidate pair first tries the leaf pair that
-  // proved its contact last frame (collide() with a PairCache). Same contacts
-  // either way; only box-test counts differ (fewer on coherent motion), and
-  // they stay deterministic.
+  // proved its contact last frame (collide() with a PairCache), and a pair
+  // tested last frame whose two objects kept their poses, trees and depths
+  // since is not tested again: its result is last frame's, with 0 box tests
+  // (the static scenery of a scene). Same contacts either way; only
+  // box-test counts differ (fewer on coherent motion), and they stay
+  // deterministic.
   bool coherence = true;
 };
 
@@ -199,6 +202,9 @@ struct DetectStats {
   // tested at the depth still held (conservative, as for depth_clamps); the
   // error itself is CollisionWorld::last_stream_error().
   uint64_t stream_errors = 0;
+  // Pairs answered by last frame's result (see CollisionSettings::coherence):
+  // counted in pair_tests, with 0 box tests.
+  uint64_t pairs_reused = 0;
 };
 
 struct RayHit {
@@ -374,6 +380,9 @@ class OCTBAKE_API CollisionWorld {
     uint64_t area_epoch = 0;  // == epoch_: area/depth match the current pose, camera and LOD
     double area = 0;
     TreeSource source;
+    // Bumped by every pose change and every create in this slot: a pair
+    // result stays valid while both objects keep theirs (with tree, depth).
+    uint64_t moves = 0;
   };
 
   Status check(ObjectHandle h) const;
@@ -451,6 +460,13 @@ class OCTBAKE_API CollisionWorld {
     PairCache cache;  // in: the last frame's proving leaf pair; out: this frame's
     ContactEstimate estimate;  // with test.hit
     bool apart = false;  // roots_apart, with an empty cache: test is one box test, a miss
+    bool reused = false;  // test and estimate are last's, with 0 box tests
+    // Coherence: the pair's result last frame, if it was tested (not apart).
+    const PairResult* last = nullptr;
+    // What was tested (not apart): the trees and depths (leaf: test.leaf)
+    // and both objects' Slot::moves.
+    PairCache tested;
+    uint64_t moves_a = 0, moves_b = 0;
   };
   std::vector<std::pair<uint32_t, uint32_t>> pair_room_, spilled_pairs_;  // collect_pairs: the scan's room, overflow
   std::vector<uint32_t> stale_;  // objects in pairs whose depth is stale
@@ -467,15 +483,14 @@ class OCTBAKE_API CollisionWorld {
   std::vector<WorldTree::CellRange> ranges_;  // commit_poses: per dirty_ entry
   std::vector<uint32_t> claim_;  // set_poses: per slot, the item that claimed it (duplicate check)
   std::vector<PairResult> results_;
-  // Temporal coherence: per candidate pair (slots a < b, sorted by key) the
-  // leaf pair that proved its last contact, tried first next frame. Only an
-  // occupied leaf pair that still overlaps counts, so a stale entry (a slot
-  // reused, a depth changed) costs one box test and is never a false hit.
-  struct CoherentPair {
-    uint64_t key;
-    PairCache cache;
-  };
-  std::vector<CoherentPair> coherence_, coherence_next_;
+  // Temporal coherence: last frame's pairs (sorted) and their results,
+  // swapped with this frame's at the end of detect(). A hit's leaf pair is
+  // tried first: only an occupied leaf pair that still overlaps counts, so a
+  // stale one (a slot reused, a depth changed) costs one box test and is
+  // never a false hit. The whole result is reused only while both objects'
+  // moves, trees and depths are those tested.
+  std::vector<std::pair<uint32_t, uint32_t>> last_pairs_;
+  std::vector<PairResult> last_results_;
   std::vector<uint32_t> streamed_;  // scratch for the require phase
   std::vector<double> areas_scratch_;
   std::vector<int> max_scratch_, depth_scratch_;

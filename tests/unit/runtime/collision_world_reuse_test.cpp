@@ -1,0 +1,160 @@
+// Temporal coherence's reuse: a pair tested last frame whose two objects kept
+// their poses, trees and depths is answered by last frame's result (0 box
+// tests), and any change to one of those is tested again.
+#include <gtest/gtest.h>
+
+#include <bit>
+
+#include "collision_world_util.h"
+
+namespace octbake {
+namespace {
+
+// Depth `depth`, every box occupied: a solid cube of edge 2.
+ObjectTree solid_cube(int depth) {
+  OctreeMasks m;
+  m.bounds = {Eigen::Vector3d::Constant(-1), Eigen::Vector3d::Constant(1)};
+  for (int d = 0; d < depth; ++d) m.masks.emplace_back(size_t(1) << (3 * d), uint8_t{0xFF});
+  return test::make_tree(std::move(m));
+}
+
+// Only the (-x, -y, -z) octant of [-1, 1]^3 occupied, solid below it.
+ObjectTree corner_cube() {
+  OctreeMasks m;
+  m.bounds = {Eigen::Vector3d::Constant(-1), Eigen::Vector3d::Constant(1)};
+  m.masks = {{0x01}, std::vector<uint8_t>(1, 0xFF), std::vector<uint8_t>(8, 0xFF)};
+  return test::make_tree(std::move(m));
+}
+
+Pose at(double x) {
+  Pose p;
+  p.position = {x, 0, 0};
+  return p;
+}
+
+// Every double of the estimate, as bits.
+std::vector<uint64_t> bits(const ContactEstimate& e) {
+  std::vector<uint64_t> out;
+  const auto add = [&](const double* v, int n) {
+    for (int i = 0; i < n; ++i) out.push_back(std::bit_cast<uint64_t>(v[i]));
+  };
+  for (const OrientedBox* b : {&e.leaf_a, &e.leaf_b}) add(b->center.data(), 3), add(b->axes.data(), 9), add(b->half.data(), 3);
+  add(e.overlap.min.data(), 3), add(e.overlap.max.data(), 3), add(e.normal.data(), 3), add(&e.penetration, 1);
+  return out;
+}
+bool same_bits(const ContactEstimate& x, const ContactEstimate& y) { return bits(x) == bits(y); }
+
+struct Frame {
+  DetectStats stats;
+  std::vector<Contact> contacts;
+};
+
+class Reuse : public ::testing::TestWithParam<bool> {  // coherence
+ protected:
+  Reuse() : solid_(solid_cube(4)), corner_(corner_cube()) {
+    CollisionSettings s;
+    s.coherence = GetParam();
+    s.bounds = {Eigen::Vector3d::Constant(-10), Eigen::Vector3d::Constant(10)};
+    s.world_depth = 2;
+    s.lod.policy = LodPolicy::fixed;
+    s.lod.max_depth = 3;
+    world_ = std::make_unique<CollisionWorld>(s);
+  }
+  Frame detect() {
+    Frame f;
+    f.stats = world_->detect(f.contacts);
+    return f;
+  }
+  // Reused pairs, as expected with coherence (none without).
+  uint64_t reused(uint64_t with_coherence) const { return GetParam() ? with_coherence : 0; }
+
+  ObjectTree solid_, corner_;
+  std::unique_ptr<CollisionWorld> world_;
+};
+
+TEST_P(Reuse, UnchangedPairsKeepTheirAnswerAndAnyChangeIsTestedAgain) {
+  // A and B touch; C and D's root boxes overlap but their corners do not.
+  const ObjectHandle a = *world_->create(TreeSource::fixed(&solid_), at(0));
+  const ObjectHandle b = *world_->create(TreeSource::fixed(&solid_), at(1.5));
+  const ObjectHandle c = *world_->create(TreeSource::fixed(&corner_), at(5));
+  ObjectHandle d = *world_->create(TreeSource::fixed(&corner_), at(6.5));
+
+  const Frame first = detect();
+  ASSERT_EQ(first.stats.pair_tests, 2u);
+  ASSERT_EQ(first.contacts.size(), 1u);
+  EXPECT_EQ(first.stats.pairs_reused, 0u);
+  const Contact ab = first.contacts[0];
+  EXPECT_EQ(ab.a, a);
+  EXPECT_EQ(ab.depth_a, 3);
+  EXPECT_GT(ab.box_tests, 0u);
+  EXPECT_GT(first.stats.box_tests, ab.box_tests);  // C-D was tested down to its leaves too
+
+  // Nothing changed, or poses set to the same bits: both answered as before.
+  for (int k = 0; k < 2; ++k) {
+    if (k == 1) {
+      ASSERT_TRUE(world_->set_pose(b, at(1.5)).ok());
+    }
+    const Frame f = detect();
+    ASSERT_EQ(f.contacts.size(), 1u);
+    EXPECT_EQ(f.stats.pairs_reused, reused(2));
+    EXPECT_EQ(f.contacts[0].a, ab.a);
+    EXPECT_EQ(f.contacts[0].b, ab.b);
+    EXPECT_EQ(f.contacts[0].depth_b, ab.depth_b);
+    EXPECT_TRUE(same_bits(f.contacts[0].estimate, ab.estimate));
+    if (GetParam()) {
+      EXPECT_EQ(f.contacts[0].box_tests, 0u);
+      EXPECT_EQ(f.stats.box_tests, 0u);
+    }
+  }
+
+  // B moves: A-B is tested again, C-D is not; back where it was, A-B is
+  // tested again (its pose changed twice) and gives the first answer.
+  for (double x : {1.51, 1.5}) {
+    ASSERT_TRUE(world_->set_pose(b, at(x)).ok());
+    const Frame f = detect();
+    ASSERT_EQ(f.contacts.size(), 1u);
+    EXPECT_EQ(f.stats.pairs_reused, reused(1)) << x;
+    EXPECT_GT(f.contacts[0].box_tests, 0u) << x;
+    if (x == 1.5) {
+      EXPECT_TRUE(same_bits(f.contacts[0].estimate, ab.estimate));
+    }
+  }
+
+  // D destroyed and created again in its slot, the same tree and pose: a new
+  // object, tested again (A-B, unchanged since last frame, is reused).
+  const uint32_t slot = d.slot;
+  ASSERT_TRUE(world_->destroy(d).ok());
+  d = *world_->create(TreeSource::fixed(&corner_), at(6.5));
+  ASSERT_EQ(d.slot, slot);
+  Frame f = detect();
+  EXPECT_EQ(f.stats.pairs_reused, reused(1));
+  ASSERT_EQ(f.contacts.size(), 1u);
+  EXPECT_EQ(f.contacts[0].box_tests, GetParam() ? 0u : ab.box_tests);
+  EXPECT_GT(f.stats.box_tests, f.contacts[0].box_tests);
+
+  // Other depths: every pair tested again, then reused.
+  LodSettings lod = world_->lod();
+  lod.max_depth = 2;
+  ASSERT_TRUE(world_->set_lod(lod).ok());
+  f = detect();
+  EXPECT_EQ(f.stats.pairs_reused, 0u);
+  ASSERT_EQ(f.contacts.size(), 1u);
+  EXPECT_EQ(f.contacts[0].depth_a, 2);
+  EXPECT_GT(f.contacts[0].box_tests, 0u);
+  f = detect();
+  EXPECT_EQ(f.stats.pairs_reused, reused(2));
+  ASSERT_EQ(f.contacts.size(), 1u);
+  EXPECT_EQ(f.contacts[0].depth_a, 2);
+
+  // A pair apart last frame (no test to reuse) that now touches is tested.
+  ASSERT_TRUE(world_->set_pose(c, at(1.5)).ok());  // inside B: A-C, B-C new
+  f = detect();
+  EXPECT_EQ(f.stats.pairs_reused, reused(1));  // C-D's roots are now apart; A-B kept
+  EXPECT_EQ(f.contacts.size(), 3u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Coherence, Reuse, ::testing::Bool(),
+                         [](const auto& info) { return info.param ? "On" : "Off"; });
+
+}  // namespace
+}  // namespace octbake
