@@ -494,9 +494,7 @@ Result<ObjectHandle> CollisionWorld::create(TreeSource source, const Pose& pose)
   const uint32_t generation = s.generation + 1 == 0 ? 1 : s.generation + 1;
   // A slot destroyed since the last commit is still listed: list it once.
   const bool listed = s.listed;
-  const uint64_t moves = s.moves + 1;  // not a pose a pair result of the slot's last object was tested on
   s = Slot{};
-  s.moves = moves;
   s.generation = live_generation_[i] = generation;
   s.source = source;
   s.pose = pose;
@@ -530,6 +528,10 @@ bool same_frame_of(const Pose& a, const Pose& b) {
 }
 // Bitwise the same pose: set_pose is then a no-op (the stored pose was checked).
 bool same_pose(const Pose& a, const Pose& b) { return same_frame_of(a, b) && same_bits(a.position, b.position); }
+// The same tree, pose and depth: collide() gives the same result.
+bool same_placement(const PlacedTree& a, const PlacedTree& b) {
+  return a.tree == b.tree && a.depth == b.depth && same_pose(a.pose, b.pose);
+}
 
 }  // namespace
 
@@ -537,7 +539,6 @@ bool same_pose(const Pose& a, const Pose& b) { return same_frame_of(a, b) && sam
 [[gnu::always_inline]] inline bool CollisionWorld::move_to(uint32_t i, const Pose& pose, bool same_frame) {
   Slot& s = slots_[i];
   s.pose = pose;
-  ++s.moves;
   if (!same_frame) set_offset(i);  // only the position changed: the offset box stays
   place_box(i);
   if (settings_.area_refresh == AreaRefresh::on_demand) s.area_epoch = 0;
@@ -906,14 +907,11 @@ void CollisionWorld::test_pairs(size_t begin, size_t end) {
       continue;
     }
     const PlacedTree pa = placed(a), pb = placed(b);
-    r.moves_a = slots_[a].moves;
-    r.moves_b = slots_[b].moves;
-    // Tested last frame on the same trees, depths and poses: the same result
+    // Tested last frame on the same trees, poses and depths: the same result
     // (collide is deterministic; a hit's leaf pair, tried first, would prove
     // it again), so none of it is redone.
     const PairResult* last = r.last;
-    r.reused = last && last->moves_a == r.moves_a && last->moves_b == r.moves_b && last->tested.tree_a == pa.tree &&
-               last->tested.tree_b == pb.tree && last->tested.depth_a == pa.depth && last->tested.depth_b == pb.depth;
+    r.reused = last && same_placement(last->tested_a, pa) && same_placement(last->tested_b, pb);
     if (r.reused) {
       r.test = PairTest{.hit = last->test.hit, .box_tests = 0, .leaf = last->test.leaf};
       if (r.test.hit) r.estimate = last->estimate;
@@ -921,7 +919,8 @@ void CollisionWorld::test_pairs(size_t begin, size_t end) {
       r.test = settings_.coherence ? collide(pa, pb, r.cache) : collide(pa, pb);
       if (r.test.hit) r.estimate = estimate_contact(leaf_box(pa, r.test.leaf.a), leaf_box(pb, r.test.leaf.b));
     }
-    r.tested = PairCache{pa.tree, pb.tree, pa.depth, pb.depth, r.test.leaf};
+    r.tested_a = pa;
+    r.tested_b = pb;
   }
 }
 
@@ -1054,7 +1053,10 @@ DetectStats CollisionWorld::detect(std::vector<Contact>& out) {
       PairResult& r = results_[k];
       r.last = j < last_pairs_.size() && last_pairs_[j] == pairs_[k] && !last_results_[j].apart ? &last_results_[j]
                                                                                                 : nullptr;
-      r.cache = r.last && r.last->test.hit ? r.last->tested : PairCache{};
+      r.cache = r.last && r.last->test.hit ? PairCache{r.last->tested_a.tree, r.last->tested_b.tree,
+                                                       r.last->tested_a.depth, r.last->tested_b.depth,
+                                                       r.last->test.leaf}
+                                            : PairCache{};
     }
   }
   run_parallel(n, kPairGrain, range_task([this](size_t b, size_t e) { find_apart(b, e); }));

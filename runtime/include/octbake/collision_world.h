@@ -162,8 +162,8 @@ struct CollisionSettings {
   Executor* executor = nullptr;  // not owned; must outlive the world
   // Temporal coherence: each candidate pair first tries the leaf pair that
   // proved its contact last frame (collide() with a PairCache), and a pair
-  // tested last frame whose two objects kept their poses, trees and depths
-  // since is not tested again: its result is last frame's, with 0 box tests
+  // tested last frame on the same trees, poses (bit for bit) and depths as
+  // now is not tested again: its result is last frame's, with 0 box tests
   // (the static scenery of a scene). Same contacts either way; only
   // box-test counts differ (fewer on coherent motion), and they stay
   // deterministic.
@@ -380,9 +380,6 @@ class OCTBAKE_API CollisionWorld {
     uint64_t area_epoch = 0;  // == epoch_: area/depth match the current pose, camera and LOD
     double area = 0;
     TreeSource source;
-    // Bumped by every pose change and every create in this slot: a pair
-    // result stays valid while both objects keep theirs (with tree, depth).
-    uint64_t moves = 0;
   };
 
   Status check(ObjectHandle h) const;
@@ -463,10 +460,7 @@ class OCTBAKE_API CollisionWorld {
     bool reused = false;  // test and estimate are last's, with 0 box tests
     // Coherence: the pair's result last frame, if it was tested (not apart).
     const PairResult* last = nullptr;
-    // What was tested (not apart): the trees and depths (leaf: test.leaf)
-    // and both objects' Slot::moves.
-    PairCache tested;
-    uint64_t moves_a = 0, moves_b = 0;
+    PlacedTree tested_a, tested_b;  // what was tested (not apart)
   };
   std::vector<std::pair<uint32_t, uint32_t>> pair_room_, spilled_pairs_;  // collect_pairs: the scan's room, overflow
   std::vector<uint32_t> stale_;  // objects in pairs whose depth is stale
@@ -488,7 +482,7 @@ class OCTBAKE_API CollisionWorld {
   // tried first: only an occupied leaf pair that still overlaps counts, so a
   // stale one (a slot reused, a depth changed) costs one box test and is
   // never a false hit. The whole result is reused only while both objects'
-  // moves, trees and depths are those tested.
+  // trees, poses (bit for bit) and depths are those tested.
   std::vector<std::pair<uint32_t, uint32_t>> last_pairs_;
   std::vector<PairResult> last_results_;
   std::vector<uint32_t> streamed_;  // scratch for the require phase
