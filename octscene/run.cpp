@@ -108,6 +108,7 @@ Result<RunResult> run_scene(const Scene& scene, const SceneModels& models, const
     frame_ms.push_back(ms);
 
     result.pair_tests += stats.pair_tests;
+    result.pairs_reused += stats.pairs_reused;
     result.box_tests += stats.box_tests;
     result.collisions += collisions.size();
     for (const Collision& c : collisions) {

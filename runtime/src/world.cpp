@@ -78,6 +78,7 @@ FrameStats World::step(std::vector<Collision>& collisions) {
   const DetectStats d = world_.detect(contacts_);
   FrameStats stats;
   stats.pair_tests = d.pair_tests;
+  stats.pairs_reused = d.pairs_reused;
   stats.box_tests = d.box_tests;
   stats.collisions = d.contacts;
   stats.area_refreshes = d.area_computations;

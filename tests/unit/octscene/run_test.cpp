@@ -142,6 +142,39 @@ TEST(Run, SummaryJsonHasEveryKey) {
   EXPECT_GT(j["peak_rss_mb"].get<double>(), 0);
 }
 
+// Two static cubes resting against each other: tested on frame 0, then
+// answered by the frame before's result (0 box tests) while the third cube
+// slides past elsewhere.
+TEST(Run, RestingPairIsReusedWithZeroBoxTests) {
+  const fs::path& dir = scratch_with_trees();
+  json scene = sliding_scene(/*frames=*/30);
+  scene["objects"][0]["position"] = {20, 0, 0};  // a, away from b's path
+  scene["objects"][2] = {{"name", "c"}, {"model", "cube"}, {"position", {21.5, 0.25, 0}}};
+  write_text(dir / "rest.json", scene.dump());
+  Command c = run_command(kOctscene + " run " + (dir / "rest.json").string() + " --summary json --response none " +
+                              "--lod fixed --max-depth 3 --log " + (dir / "rest.csv").string(),
+                          dir);
+  ASSERT_EQ(c.status, 0) << c.err;
+  const json j = json::parse(c.out);
+  EXPECT_EQ(j["collisions"], 30);
+  EXPECT_EQ(j["pair_tests"], 30);
+  EXPECT_EQ(j["pairs_reused"], 29);
+  const std::vector<std::string> lines = lines_of(read_text(dir / "rest.csv"));
+  ASSERT_EQ(lines.size(), 31u);
+  for (size_t i = 1; i < lines.size(); ++i) {
+    const std::vector<std::string> f = split(lines[i]);
+    ASSERT_EQ(f.size(), 13u);
+    EXPECT_EQ(f[2] + f[3], "ac");
+    EXPECT_EQ(std::stoull(f[6]) > 0, i == 1) << lines[i];
+  }
+  EXPECT_EQ(j["box_tests"].get<uint64_t>(), std::stoull(split(lines[1])[6]));
+  // The text summary says it too.
+  c = run_command(kOctscene + " run " + (dir / "rest.json").string() + " --response none --lod fixed --max-depth 3",
+                  dir);
+  ASSERT_EQ(c.status, 0) << c.err;
+  EXPECT_NE(c.out.find("pair tests       30 (29 reused)"), std::string::npos) << c.out;
+}
+
 TEST(Run, FramesOptionOverridesTheScene) {
   const fs::path& dir = scratch_with_trees();
   write_text(dir / "slide.json", sliding_scene(/*frames=*/60).dump());
