@@ -1041,10 +1041,11 @@ DetectStats CollisionWorld::detect(std::vector<Contact>& out) {
   const size_t n = pairs_.size();
   stats.candidate_pairs = stats.pair_tests = n;
 
-  // 4. Last frame's tests (coherence), matched by a merge over sorted keys:
-  // a hit's leaf pair is tried first; the pairs without one whose root boxes
-  // are apart: collide() would end at its root test at any depths, so they
-  // ask for no depth (one box test each, as collide() counts it).
+  // 4. Last frame's results (coherence), matched by a merge over the sorted
+  // pairs: a hit's leaf pair is tried first; the pairs without one whose
+  // root boxes are apart: collide() would end at its root test at any
+  // depths, so they ask for no depth (one box test each, as collide()
+  // counts it).
   results_.resize(n);
   {
     size_t j = 0;

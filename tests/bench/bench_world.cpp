@@ -124,6 +124,7 @@ void BM_WorldStep(benchmark::State& state) {
   reinsertions = world.world_tree().reinsertions() - reinsertions;
   const double frames = double(state.iterations());
   state.counters["pair_tests"] = double(total.pair_tests) / frames;
+  state.counters["pairs_reused"] = double(total.pairs_reused) / frames;
   state.counters["box_tests"] = double(total.box_tests) / frames;
   state.counters["collisions"] = double(total.collisions) / frames;
   state.counters["area_refreshes"] = double(total.area_refreshes) / frames;
@@ -274,12 +275,9 @@ void set_counters(benchmark::State& state, const DetectStats& total, uint64_t al
   state.counters["allocs_per_frame"] = double(allocations) / frames;
 }
 
-void BM_Detect(benchmark::State& state) {
-  const Scene scene = make_scene(int(state.range(0)));
-  const LodPolicy policy = LodPolicy(state.range(1));
-  CollisionSettings settings = collision_settings(scene, policy);
-  settings.threads = int(state.range(2));  // detect()'s parallel parts on this many threads
-  const bool batch = state.range(3) != 0;    // set_poses (parallel) instead of a set_pose loop
+// The app's frames on `scene`: its poses (set_poses, or a set_pose loop),
+// its camera, detect(); timed after a warm-up.
+void detect_frames(benchmark::State& state, const Scene& scene, const CollisionSettings& settings, bool batch) {
   CollisionWorld world(settings);
   std::vector<ObjectHandle> handles;
   for (const ObjectDesc& o : scene.objects) handles.push_back(world.create(TreeSource::fixed(o.tree), o.pose).value());
@@ -320,12 +318,21 @@ void BM_Detect(benchmark::State& state) {
     state.PauseTiming();
     allocations += g_allocations.load() - before;
     total.pair_tests += d.pair_tests;
+    total.pairs_reused += d.pairs_reused;
     total.box_tests += d.box_tests;
     total.contacts += d.contacts;
     total.area_computations += d.area_computations;
     state.ResumeTiming();
   }
   set_counters(state, total, allocations, times);
+}
+
+void BM_Detect(benchmark::State& state) {
+  const Scene scene = make_scene(int(state.range(0)));
+  CollisionSettings settings = collision_settings(scene, LodPolicy(state.range(1)));
+  settings.threads = int(state.range(2));  // detect()'s parallel parts on this many threads
+  const bool batch = state.range(3) != 0;  // set_poses (parallel) instead of a set_pose loop
+  detect_frames(state, scene, settings, batch);
 }
 // Fixed frame counts, so every case (and FCL) sees exactly the same poses.
 constexpr int kFrames10k = 300, kFrames100k = 40;
@@ -353,42 +360,7 @@ void BM_Resting(benchmark::State& state) {
     scene.objects[i].pose.position = scene.objects[i - 1].pose.position + Eigen::Vector3d(0.6, 0.1, 0);
   CollisionSettings settings = collision_settings(scene, LodPolicy(state.range(1)));
   settings.coherence = state.range(2) != 0;
-  CollisionWorld world(settings);
-  std::vector<ObjectHandle> handles;
-  for (const ObjectDesc& o : scene.objects) handles.push_back(world.create(TreeSource::fixed(o.tree), o.pose).value());
-  AppMotion motion(scene);
-  std::vector<Contact> contacts;
-  int64_t f = 0;
-  for (; f < kWarmup; ++f) {
-    motion.at(f);
-    (void)world.set_poses(handles, motion.now);
-    world.set_camera(AppMotion::camera(scene, f));
-    world.detect(contacts);
-  }
-  DetectStats total;
-  FrameTimes times(state);
-  for (auto _ : state) {
-    state.PauseTiming();
-    motion.at(f);
-    const Camera camera = AppMotion::camera(scene, f);
-    ++f;
-    state.ResumeTiming();
-    times.start();
-    (void)world.set_poses(handles, motion.now);
-    world.set_camera(camera);
-    const DetectStats d = world.detect(contacts);
-    times.stop();
-    total.pair_tests += d.pair_tests;
-    total.pairs_reused += d.pairs_reused;
-    total.box_tests += d.box_tests;
-    total.contacts += d.contacts;
-  }
-  const double frames = double(state.iterations());
-  state.counters["frame_median_us"] = times.median();
-  state.counters["pair_tests"] = double(total.pair_tests) / frames;
-  state.counters["pairs_reused"] = double(total.pairs_reused) / frames;
-  state.counters["box_tests"] = double(total.box_tests) / frames;
-  state.counters["contacts"] = double(total.contacts) / frames;
+  detect_frames(state, scene, settings, /*batch=*/true);
 }
 BENCHMARK(BM_Resting)
     ->ArgsProduct({{10'000}, {int(LodPolicy::screen), int(LodPolicy::fixed)}, {1, 0}})

@@ -454,7 +454,7 @@ class OCTBAKE_API CollisionWorld {
   std::vector<std::pair<uint32_t, uint32_t>> pairs_;
   struct PairResult {
     PairTest test;
-    PairCache cache;  // in: the last frame's proving leaf pair; out: this frame's
+    PairCache cache;  // the leaf pair to try first: last frame's proof, if it was a hit
     ContactEstimate estimate;  // with test.hit
     bool apart = false;  // roots_apart, with an empty cache: test is one box test, a miss
     bool reused = false;  // test and estimate are last's, with 0 box tests
