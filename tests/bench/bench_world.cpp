@@ -117,6 +117,7 @@ void BM_WorldStep(benchmark::State& state) {
     collisions.clear();
     const FrameStats f = world.step(collisions);
     total.pair_tests += f.pair_tests;
+    total.pairs_reused += f.pairs_reused;
     total.box_tests += f.box_tests;
     total.collisions += f.collisions;
     total.area_refreshes += f.area_refreshes;
@@ -269,6 +270,7 @@ void set_counters(benchmark::State& state, const DetectStats& total, uint64_t al
   state.counters["frame_median_us"] = times.median();
   const double frames = double(state.iterations());
   state.counters["pair_tests"] = double(total.pair_tests) / frames;
+  state.counters["pairs_reused"] = double(total.pairs_reused) / frames;
   state.counters["box_tests"] = double(total.box_tests) / frames;
   state.counters["contacts"] = double(total.contacts) / frames;
   state.counters["area_computations"] = double(total.area_computations) / frames;
