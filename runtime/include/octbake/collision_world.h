@@ -232,7 +232,9 @@ class OCTBAKE_API CollisionWorld {
 
   // ---- objects ----
   // A new object at `pose`. Errors: null tree, bad pose, streamed source
-  // without a cache. The tree must outlive the object.
+  // without a cache. The tree must outlive the object and not change while
+  // the object lives (the world keeps its bounds, and with coherence the
+  // pair results tested on it).
   Result<ObjectHandle> create(TreeSource tree, const Pose& pose);
   Status destroy(ObjectHandle h);
   bool alive(ObjectHandle h) const;
