@@ -136,6 +136,10 @@ struct OctantTable {
 };
 constexpr OctantTable kOctants;
 
+// Set bits of a child mask below bit j: the index of child j among its
+// occupied siblings.
+uint32_t siblings_below(uint32_t mask, int j) { return kOctants.count[mask & ((1u << j) - 1)]; }
+
 // Is box c at depth d occupied in the tree?
 bool occupied(const ObjectTree& tree, int depth, const BoxCoord& c) {
   const uint32_t end = 1u << depth;
@@ -146,7 +150,7 @@ bool occupied(const ObjectTree& tree, int depth, const BoxCoord& c) {
     const uint32_t octant = ((c.x >> shift) & 1u) | (((c.y >> shift) & 1u) << 1) | (((c.z >> shift) & 1u) << 2);
     const uint8_t mask = tree.mask(d, index);
     if (!(mask & (1u << octant))) return false;
-    index = tree.first_child(d, index) + kOctants.count[mask & ((1u << octant) - 1)];
+    index = tree.first_child(d, index) + siblings_below(mask, int(octant));
   }
   return true;
 }
@@ -240,8 +244,8 @@ template <int W>
 }
 
 struct Portable {
-  // Set bits of mask below bit j (a child's index among its siblings).
-  static uint32_t bits_below(uint32_t mask, int j) { return kOctants.count[mask & ((1u << j) - 1)]; }
+  // siblings_below, per build.
+  static uint32_t bits_below(uint32_t mask, int j) { return siblings_below(mask, j); }
 
   // Width of the generic code's vectors (radii, projections, offsets): the
   // ISA's register width, 2 here (SSE2, and NEON on ARM), 4 in the AVX2
