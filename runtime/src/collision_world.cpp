@@ -893,8 +893,37 @@ void CollisionWorld::find_apart(size_t begin, size_t end) {
   for (size_t k = begin; k < end; ++k) {
     PairResult& r = results_[k];
     const auto [a, b] = pairs_[k];
-    r.apart = !r.cache.tree_a && roots_apart(roots_[a], slots_[a].pose.position, roots_[b], slots_[b].pose.position);
+    // A last hit's leaf pair is tried first (one box test that likely proves
+    // the hit again), whatever the roots.
+    const bool last_hit = r.last != kNone && last_results_[r.last].test.hit;
+    r.apart = !last_hit && roots_apart(roots_[a], slots_[a].pose.position, roots_[b], slots_[b].pose.position);
   }
+}
+
+// Each pair not apart keeps last frame's record, or takes a free one; the
+// records of last frame's pairs that are gone or apart are freed. Serial and
+// before the pair tests: each record then belongs to one pair, which alone
+// writes it.
+void CollisionWorld::assign_records() {
+  if (!settings_.coherence) {  // nothing is kept from last frame
+    records_.clear();
+    free_records_.clear();
+  }
+  for (PairResult& r : results_) {
+    if (r.apart) {
+      r.record = kNone;
+    } else if (r.last != kNone) {
+      r.record = std::exchange(last_results_[r.last].record, kNone);
+    } else if (!free_records_.empty()) {
+      r.record = free_records_.back();
+      free_records_.pop_back();
+    } else {
+      r.record = uint32_t(records_.size());
+      records_.emplace_back();
+    }
+  }
+  for (PairResult& r : last_results_)
+    if (r.record != kNone) free_records_.push_back(std::exchange(r.record, kNone));
 }
 
 void CollisionWorld::test_pairs(size_t begin, size_t end) {
@@ -907,20 +936,26 @@ void CollisionWorld::test_pairs(size_t begin, size_t end) {
       continue;
     }
     const PlacedTree pa = placed(a), pb = placed(b);
+    TestRecord& tested = records_[r.record];
     // Tested last frame on the same trees, poses and depths: the same result
     // (collide is deterministic; a hit's leaf pair, tried first, would prove
-    // it again), so none of it is redone.
-    const PairResult* last = r.last;
-    r.reused = last && same_placement(last->tested_a, pa) && same_placement(last->tested_b, pb);
+    // it again), so none of it is redone, and the record (estimate and
+    // placements) stays as it is.
+    const PairResult* last = r.last != kNone ? &last_results_[r.last] : nullptr;
+    r.reused = last && same_placement(tested.a, pa) && same_placement(tested.b, pb);
     if (r.reused) {
       r.test = PairTest{.hit = last->test.hit, .box_tests = 0, .leaf = last->test.leaf};
-      if (r.test.hit) r.estimate = last->estimate;
-    } else {
-      r.test = settings_.coherence ? collide(pa, pb, r.cache) : collide(pa, pb);
-      if (r.test.hit) r.estimate = estimate_contact(leaf_box(pa, r.test.leaf.a), leaf_box(pb, r.test.leaf.b));
+      continue;
     }
-    r.tested_a = pa;
-    r.tested_b = pb;
+    if (last && last->test.hit) {
+      PairCache hint{tested.a.tree, tested.b.tree, tested.a.depth, tested.b.depth, last->test.leaf};
+      r.test = collide(pa, pb, hint);
+    } else {
+      r.test = collide(pa, pb);
+    }
+    if (r.test.hit) tested.estimate = estimate_contact(leaf_box(pa, r.test.leaf.a), leaf_box(pb, r.test.leaf.b));
+    tested.a = pa;
+    tested.b = pb;
   }
 }
 
@@ -1051,16 +1086,12 @@ DetectStats CollisionWorld::detect(std::vector<Contact>& out) {
     size_t j = 0;
     for (size_t k = 0; k < n; ++k) {
       while (j < last_pairs_.size() && last_pairs_[j] < pairs_[k]) ++j;
-      PairResult& r = results_[k];
-      r.last = j < last_pairs_.size() && last_pairs_[j] == pairs_[k] && !last_results_[j].apart ? &last_results_[j]
-                                                                                                : nullptr;
-      r.cache = r.last && r.last->test.hit ? PairCache{r.last->tested_a.tree, r.last->tested_b.tree,
-                                                       r.last->tested_a.depth, r.last->tested_b.depth,
-                                                       r.last->test.leaf}
-                                            : PairCache{};
+      results_[k].last =
+          j < last_pairs_.size() && last_pairs_[j] == pairs_[k] && !last_results_[j].apart ? uint32_t(j) : kNone;
     }
   }
   run_parallel(n, kPairGrain, range_task([this](size_t b, size_t e) { find_apart(b, e); }));
+  assign_records();
 
   // 5. Depths of the objects in the other pairs: each stale one once, in parallel.
   if (settings_.area_refresh == AreaRefresh::on_demand) {
@@ -1138,14 +1169,13 @@ DetectStats CollisionWorld::detect(std::vector<Contact>& out) {
     stats.pairs_reused += r.reused;
     if (!r.test.hit) continue;
     const auto [a, b] = pairs_[k];
-    Contact c;
+    Contact& c = out.emplace_back();
     c.a = {a, slots_[a].generation, id_};
     c.b = {b, slots_[b].generation, id_};
     c.depth_a = slots_[a].depth;
     c.depth_b = slots_[b].depth;
     c.box_tests = r.test.box_tests;
-    c.estimate = r.estimate;
-    out.push_back(c);
+    c.estimate = records_[r.record].estimate;
   }
   if (settings_.coherence) {
     last_pairs_.swap(pairs_);

@@ -366,6 +366,11 @@ class OCTBAKE_API CollisionWorld {
   }
   // The handle living in `slot`, if any.
   std::optional<ObjectHandle> handle_at(uint32_t slot) const;
+  // Memory held for pair tests: the records of what each candidate pair was
+  // tested on and its contact estimate, ~480 bytes each. detect() keeps one
+  // per pair whose roots are not apart and frees those of pairs gone, so
+  // this stays below the pair tests of two consecutive frames.
+  size_t pair_records() const { return records_.size(); }
 
  private:
   friend class World;  // runs its per-object motion with run_parallel
@@ -416,6 +421,7 @@ class OCTBAKE_API CollisionWorld {
   bool has_threads() const { return settings_.executor != nullptr || pool_ != nullptr; }  // else run_parallel is a loop
   void collect_pairs();  // pairs_: the WorldTree's overlapping pairs, sorted
   void find_apart(size_t begin, size_t end);  // results_[k].apart
+  void assign_records();  // results_[k].record
   void test_pairs(size_t begin, size_t end);
   // Queries: the nearest leaf of slot i entered within `limit` past t_box
   // (local distance and box); does slot i have a leaf overlapping the box
@@ -454,15 +460,22 @@ class OCTBAKE_API CollisionWorld {
 
   // Per frame scratch, kept to avoid allocations.
   std::vector<std::pair<uint32_t, uint32_t>> pairs_;
+  // Per candidate pair, what every pass of detect() reads. What was tested
+  // and the contact estimate are in the pair's TestRecord, which it keeps
+  // from frame to frame while it stays a candidate and is not apart: a
+  // reused result copies nothing (at 10k resting objects, copying 656-byte
+  // results was a quarter of the frame).
+  static constexpr uint32_t kNone = UINT32_MAX;
   struct PairResult {
     PairTest test;
-    PairCache cache;  // the leaf pair to try first: last frame's proof, if it was a hit
-    ContactEstimate estimate;  // with test.hit
-    bool apart = false;  // roots_apart, with an empty cache: test is one box test, a miss
+    uint32_t last = kNone;    // coherence: index of the pair in last_results_, if it was tested (not apart)
+    uint32_t record = kNone;  // its TestRecord in records_ (not apart)
+    bool apart = false;  // roots_apart, and last frame no hit: test is one box test, a miss
     bool reused = false;  // test and estimate are last's, with 0 box tests
-    // Coherence: the pair's result last frame, if it was tested (not apart).
-    const PairResult* last = nullptr;
-    PlacedTree tested_a, tested_b;  // what was tested (not apart)
+  };
+  struct TestRecord {  // read only by the pair that wrote it, in the next frame
+    PlacedTree a, b;  // the placements last tested
+    ContactEstimate estimate;  // with that test's hit
   };
   std::vector<std::pair<uint32_t, uint32_t>> pair_room_, spilled_pairs_;  // collect_pairs: the scan's room, overflow
   std::vector<uint32_t> stale_;  // objects in pairs whose depth is stale
@@ -487,6 +500,8 @@ class OCTBAKE_API CollisionWorld {
   // trees, poses (bit for bit) and depths are those tested.
   std::vector<std::pair<uint32_t, uint32_t>> last_pairs_;
   std::vector<PairResult> last_results_;
+  std::vector<TestRecord> records_;     // of the pairs in results_ (and last_results_ until assign_records)
+  std::vector<uint32_t> free_records_;  // records_ no pair holds
   std::vector<uint32_t> streamed_;  // scratch for the require phase
   std::vector<double> areas_scratch_;
   std::vector<int> max_scratch_, depth_scratch_;

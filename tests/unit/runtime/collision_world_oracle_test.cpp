@@ -7,6 +7,8 @@
 #endif
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <map>
@@ -114,9 +116,31 @@ class Driver {
 
   PlacedTree placed(ObjectHandle h, int depth) { return {tree_of_[h.slot], world_->pose(h).value(), depth}; }
 
+  // Is `box` exactly the box of `p`'s tree at p.depth that holds its centre?
+  // A contact's estimate must be made of its own objects' leaves at the
+  // depths tested (not, say, another pair's, kept from an earlier frame).
+  static bool is_leaf_of(const OrientedBox& box, const PlacedTree& p) {
+    const Eigen::Vector3d local = p.pose.rotation.conjugate() * (box.center - p.pose.position) / p.pose.scale;
+    const Aabb& bounds = p.tree->bounds();
+    const double side = double(1 << p.depth);
+    uint32_t c[3];
+    for (int k = 0; k < 3; ++k) {
+      const double extent = bounds.max[k] - bounds.min[k];
+      const double t = extent > 0 ? std::floor((local[k] - bounds.min[k]) / extent * side) : 0;
+      c[k] = uint32_t(std::clamp(t, 0.0, side - 1));
+    }
+    const OrientedBox leaf = leaf_box(p, BoxCoord{c[0], c[1], c[2]});
+    return leaf.center == box.center && leaf.axes == box.axes && leaf.half == box.half;
+  }
+
   void frame(bool check, Totals& totals) {
     ASSERT_NO_FATAL_FAILURE(random_calls());
     const DetectStats stats = world_->detect(contacts_);
+    // Pair records are freed with their pairs: the pool never outgrows the
+    // pair tests of two consecutive frames.
+    most_pairs_ = std::max(most_pairs_, last_pair_tests_ + stats.pair_tests);
+    last_pair_tests_ = stats.pair_tests;
+    EXPECT_LE(world_->pair_records(), most_pairs_) << "frame " << totals.frames;
     ++totals.frames;
     totals.pair_tests += stats.pair_tests;
     totals.pairs_reused += stats.pairs_reused;
@@ -192,6 +216,8 @@ class Driver {
       // The estimate: two overlapping leaves; moving b by normal * penetration
       // (a hair more) separates them.
       const ContactEstimate& e = c.estimate;
+      EXPECT_TRUE(is_leaf_of(e.leaf_a, placed(c.a, c.depth_a))) << "frame " << totals.frames;
+      EXPECT_TRUE(is_leaf_of(e.leaf_b, placed(c.b, c.depth_b))) << "frame " << totals.frames;
       EXPECT_NEAR(e.normal.norm(), 1.0, 1e-12);
       EXPECT_GE(e.penetration, 0.0);
       const double size = e.leaf_a.half.maxCoeff() + e.leaf_b.half.maxCoeff();
@@ -210,6 +236,7 @@ class Driver {
   std::mt19937 rng_;
   std::vector<ObjectTree> trees_;
   bool coherence_ = true;
+  uint64_t last_pair_tests_ = 0, most_pairs_ = 0;
   std::unique_ptr<CollisionWorld> world_;
   std::vector<ObjectHandle> live_;
   std::map<uint32_t, const ObjectTree*> tree_of_;
