@@ -367,7 +367,7 @@ class OCTBAKE_API CollisionWorld {
   // The handle living in `slot`, if any.
   std::optional<ObjectHandle> handle_at(uint32_t slot) const;
   // Memory held for pair tests: the records of what each candidate pair was
-  // tested on and its contact estimate, ~480 bytes each. detect() keeps one
+  // tested on and its contact estimate, 544 bytes each. detect() keeps one
   // per pair whose roots are not apart and frees those of pairs gone, so
   // this stays below the pair tests of two consecutive frames.
   size_t pair_records() const { return records_.size(); }
@@ -463,8 +463,9 @@ class OCTBAKE_API CollisionWorld {
   // Per candidate pair, what every pass of detect() reads. What was tested
   // and the contact estimate are in the pair's TestRecord, which it keeps
   // from frame to frame while it stays a candidate and is not apart: a
-  // reused result copies nothing (at 10k resting objects, copying 656-byte
-  // results was a quarter of the frame).
+  // reused result copies nothing (BM_Resting, 10k objects, fixed LOD: 1.53
+  // -> 1.33 ms a frame against one 656-byte result per pair, double
+  // buffered).
   static constexpr uint32_t kNone = UINT32_MAX;
   struct PairResult {
     PairTest test;
