@@ -1168,14 +1168,17 @@ DetectStats CollisionWorld::detect(std::vector<Contact>& out) {
     stats.box_tests += r.test.box_tests;
     stats.pairs_reused += r.reused;
     if (!r.test.hit) continue;
+    // The depths as tested (the record's), the generations from
+    // live_generation_: no slot is read here.
     const auto [a, b] = pairs_[k];
+    const TestRecord& tested = records_[r.record];
     Contact& c = out.emplace_back();
-    c.a = {a, slots_[a].generation, id_};
-    c.b = {b, slots_[b].generation, id_};
-    c.depth_a = slots_[a].depth;
-    c.depth_b = slots_[b].depth;
+    c.a = {a, live_generation_[a], id_};
+    c.b = {b, live_generation_[b], id_};
+    c.depth_a = tested.a.depth;
+    c.depth_b = tested.b.depth;
     c.box_tests = r.test.box_tests;
-    c.estimate = records_[r.record].estimate;
+    c.estimate = tested.estimate;
   }
   if (settings_.coherence) {
     last_pairs_.swap(pairs_);
