@@ -93,6 +93,8 @@ Result<std::monostate> check_gen_options(const GenOptions& options) {
     return Error{ErrorCode::invalid_argument, "--scale-range: need 0 < min <= max, both finite"};
   if (!share_ok(options.rotated_share)) return Error{ErrorCode::invalid_argument, "--rotated-share: must be in [0, 1]"};
   if (!share_ok(options.spin_share)) return Error{ErrorCode::invalid_argument, "--spin-share: must be in [0, 1]"};
+  if (!share_ok(options.resting_share))
+    return Error{ErrorCode::invalid_argument, "--resting-share: must be in [0, 1]"};
   if (!(options.spin_rate >= 0) || !std::isfinite(options.spin_rate))
     return Error{ErrorCode::invalid_argument, "--spin-rate: must be >= 0"};
   if (options.camera_keys == 1 || options.camera_keys < 0)
@@ -150,6 +152,10 @@ Result<Scene> generate_scene(const GenOptions& options, ModelLibrary& library) {
       o.pose.scale = options.scale_min;
     const bool rotated = options.rotated_share > 0 && uniform(rng) < options.rotated_share;
     const bool spinning = options.spin_share > 0 && uniform(rng) < options.spin_share;
+    // Rests against an earlier static (statics come first: any placed box).
+    const bool resting = n > 0 && n < options.static_count && options.resting_share > 0 &&
+                         uniform(rng) < options.resting_share;
+    size_t against = 0;
     bool ok = false;
     for (int attempt = 0; attempt < kAttemptsPerObject && !ok; ++attempt) {
       if (rotated) {
@@ -163,10 +169,33 @@ Result<Scene> generate_scene(const GenOptions& options, ModelLibrary& library) {
       // Positions that keep the whole box inside the world.
       Eigen::Vector3d lo = scene.world.min - at_origin.min, hi = scene.world.max - at_origin.max;
       if ((lo.array() > hi.array()).any()) break;  // larger than the world
-      for (int k = 0; k < 3; ++k) o.pose.position[k] = uniform(rng, lo[k], hi[k]);
+      if (resting) {
+        // On one side of a placed box along axis k, sunk into it by a fifth
+        // of the smaller extent; centred anywhere over it on the other axes,
+        // moved into the world on those if need be (still over it, or
+        // retried).
+        against = rng() % placed.size();
+        const Aabb& other = placed[against];
+        const int k = int(rng() % 3);
+        const bool above = rng() % 2 != 0;
+        const Eigen::Vector3d size = at_origin.max - at_origin.min, other_size = other.max - other.min;
+        const double sink = 0.2 * std::min(size[k], other_size[k]);
+        for (int i = 0; i < 3; ++i)
+          o.pose.position[i] = uniform(rng, other.min[i], other.max[i]) - 0.5 * (at_origin.min[i] + at_origin.max[i]);
+        o.pose.position[k] = above ? other.max[k] - sink - at_origin.min[k] : other.min[k] + sink - at_origin.max[k];
+        if (o.pose.position[k] < lo[k] || o.pose.position[k] > hi[k]) continue;  // no room on that side
+        // A hair inside the walls: the box placed at a wall, recomputed from
+        // the pose, may round a few ulps outside.
+        const double margin = 1e-9 * options.world_size;
+        o.pose.position = o.pose.position.cwiseMax((lo.array() + margin).matrix()).cwiseMin((hi.array() - margin).matrix());
+        if (!overlap({at_origin.min + o.pose.position, at_origin.max + o.pose.position}, other)) continue;
+      } else {
+        for (int k = 0; k < 3; ++k) o.pose.position[k] = uniform(rng, lo[k], hi[k]);
+      }
       Aabb box{at_origin.min + o.pose.position, at_origin.max + o.pose.position};
       index.query_box(box, near);
-      ok = std::none_of(near.begin(), near.end(), [&](uint32_t i) { return overlap(box, placed[i]); });
+      ok = std::none_of(near.begin(), near.end(),
+                        [&](uint32_t i) { return !(resting && i == against) && overlap(box, placed[i]); });
       if (ok) {
         index.update(uint32_t(placed.size()), box);
         placed.push_back(box);

@@ -28,12 +28,18 @@ struct GenOptions {
   double spin_share = 0;     // share of objects given an angular velocity
   double spin_rate = 1;      // spinning objects get rates in [rate/2, rate) rad/s about a random axis
   int camera_keys = 0;       // >= 2: a camera path of that many keys flying through the world box
+  double resting_share = 0;  // share of statics (after the first) placed against an earlier static
 };
 
 // Objects are placed uniformly with random yaw (or a random orientation, a
 // rotated_share of them), each wholly inside the world box and with a world
 // AABB (of its rotated bounds; for a spinning object, of the sphere it spins
-// in) disjoint from every earlier one, so no pair overlaps at frame 0.
+// in) disjoint from every earlier one, so no pair overlaps at frame 0; but a
+// resting_share of the statics (drawn per static after the first) rest
+// against an earlier static picked at random: their world AABBs overlap by
+// a fifth of the smaller box's extent on one axis (their meshes may touch or
+// not), and disjoint from every other box. Such pairs are candidates every
+// frame that never change: static clutter, props on props.
 // Whether an object is rotated or spins is drawn per object. Statics (zero
 // velocity; they may spin) come first, named
 // "<model>_<k>". The same options and trees give the same scene on every

@@ -466,6 +466,9 @@ int cli_main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber)->check(kFiniteNumber)->capture_default_str();
   gen_cmd->add_option("--camera-path", gen.options.camera_keys, "KEYS: a camera path of KEYS keys through the world")
       ->check(CLI::Range(2, 10000));
+  gen_cmd->add_option("--resting-share", gen.options.resting_share,
+                      "share of static objects placed against an earlier static (world boxes overlapping)")
+      ->check(CLI::Range(0.0, 1.0))->check(kFiniteNumber);
 
   // Listed in --help; main() hands them their arguments before CLI11 parses.
   for (const Tool& tool : tools()) app.add_subcommand(tool.name, tool.help)->allow_extras();

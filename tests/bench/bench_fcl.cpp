@@ -18,8 +18,9 @@
 //   build/tests/bench_fcl --benchmark_repetitions=3 [--scene=PATH ...] [--meshes=DIR] [--frames=N] [--csv=FILE]
 //     [--kernel=portable|avx2|avx512] (kernel_option.h)
 // Default scenes: assets/scenes/test1.json and test2.json (the thesis's), and
-// scales.json (sizes 536x apart) and flythrough.json (all rotated, half
-// spinning, camera on a path), meshes in assets/;
+// scales.json (sizes 536x apart), flythrough.json (all rotated, half
+// spinning, camera on a path) and clutter.json (most statics resting on
+// statics: pairs that never change), meshes in assets/;
 // if they are missing, a generated scene of spheres, tori and slabs.
 #include <benchmark/benchmark.h>
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
@@ -623,7 +624,7 @@ int main(int argc, char** argv) {
   const fs::path source = OCTBAKE_SOURCE_DIR;
   if (scene_paths.empty()) {
     for (const char* s : {"assets/scenes/test1.json", "assets/scenes/test2.json", "assets/scenes/scales.json",
-                          "assets/scenes/flythrough.json"}) {
+                          "assets/scenes/flythrough.json", "assets/scenes/clutter.json"}) {
       if (fs::exists(source / s)) scene_paths.push_back((source / s).string());
     }
     if (meshes_dir.empty()) meshes_dir = (source / "assets").string();

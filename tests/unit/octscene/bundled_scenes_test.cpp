@@ -99,6 +99,37 @@ const fs::path& baked_assets() {
   return dir;
 }
 
+// Most statics lean on another static (their world boxes overlap at frame
+// 0), no moving object touches anything, and the camera flies: the pairs
+// that coherence answers from last frame, among pairs it must test.
+TEST(BundledStress, ClutterStaticsRestOnStatics) {
+  const Scene s = load_bundled("clutter.json");
+  ASSERT_FALSE(s.objects.empty());
+  Result<ModelLibrary> library = ModelLibrary::open(baked_assets().string());
+  ASSERT_TRUE(library) << library.error().message;
+  std::vector<Aabb> boxes;
+  for (const SceneObject& o : s.objects) boxes.push_back(world_bounds(place(library->info(o.model)->bounds, o.pose)));
+  const auto overlap = [](const Aabb& a, const Aabb& b) {
+    return (a.min.array() <= b.max.array()).all() && (b.min.array() <= a.max.array()).all();
+  };
+  size_t statics = 0, resting = 0;
+  for (size_t i = 0; i < s.objects.size(); ++i) {
+    const bool moving = !s.objects[i].velocity.isZero(0);
+    statics += !moving;
+    size_t met = 0;
+    for (size_t j = 0; j < boxes.size(); ++j) met += j != i && overlap(boxes[i], boxes[j]);
+    if (moving) {
+      EXPECT_EQ(met, 0u) << s.objects[i].name << " moves and starts in contact";
+    }
+    bool leans = false;
+    for (size_t j = 0; j < i; ++j) leans = leans || overlap(boxes[i], boxes[j]);
+    resting += !moving && leans;
+  }
+  EXPECT_GT(resting, statics / 2);
+  EXPECT_GE(s.camera_path.size(), 2u);
+  EXPECT_LE(s.frames, 900);
+}
+
 // Every `octscene gen ARGS > assets/scenes/X.json` in the README, joined over
 // its line continuations (no <regex>: GCC 12 warns inside it at -O1).
 std::vector<std::pair<std::string, std::string>> readme_commands() {
@@ -142,7 +173,7 @@ TEST(BundledScenes, ReadmeCommandsGenerateTheShippedBytes) {
 TEST(BundledScenes, LogsAreByteIdenticalForEveryThreadCount) {
   Result<ModelLibrary> library = ModelLibrary::open(baked_assets().string());
   ASSERT_TRUE(library) << library.error().message;
-  for (const char* file : {"test1.json", "test2.json", "scales.json", "flythrough.json"}) {
+  for (const char* file : {"test1.json", "test2.json", "scales.json", "flythrough.json", "clutter.json"}) {
     Scene scene = load_bundled(file);
     Result<SceneModels> models = load_scene_models(scene, *library, 12);
     ASSERT_TRUE(models) << models.error().message;

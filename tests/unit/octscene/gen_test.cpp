@@ -95,7 +95,7 @@ TEST(GenMotion, DefaultsDrawNothingNew) {
   const fs::path& dir = scratch_with_trees();
   Command a = run_command(gen_command(dir, 30, 20, 5, 40), dir);
   Command b = run_command(gen_command(dir, 30, 20, 5, 40) +
-                              " --scale-range 1,1 --rotated-share 0 --spin-share 0 --spin-rate 3",
+                              " --scale-range 1,1 --rotated-share 0 --spin-share 0 --spin-rate 3 --resting-share 0",
                           dir);
   ASSERT_EQ(a.status, 0) << a.err;
   ASSERT_EQ(b.status, 0) << b.err;
@@ -170,6 +170,53 @@ TEST(GenMotion, RotatedAndSpinningShares) {
   }
 }
 
+// A resting static overlaps exactly one earlier box, a static's, by a fifth
+// of the smaller extent on one axis (a little more where the world's walls
+// moved it); every other box starts apart from all earlier ones.
+TEST(GenMotion, RestingStaticsLeanOnOneEarlierStatic) {
+  const fs::path& dir = scratch_with_trees();
+  Result<ModelLibrary> library = ModelLibrary::open((dir / "baked").string());
+  ASSERT_TRUE(library);
+  const int statics = 60, moving = 30;
+  Result<Scene> s = gen_scene(dir, "--resting-share 0.6 --rotated-share 0.5", statics, moving, 40);
+  ASSERT_TRUE(s) << s.error().message;
+  std::vector<Aabb> boxes;
+  int resting = 0;
+  for (size_t i = 0; i < s->objects.size(); ++i) {
+    const SceneObject& o = s->objects[i];
+    const Aabb box = world_bounds(place(library->info(o.model)->bounds, o.pose));
+    EXPECT_TRUE((box.min.array() >= s->world.min.array()).all() && (box.max.array() <= s->world.max.array()).all())
+        << o.name << " leaves the world";
+    std::vector<size_t> met;
+    for (size_t j = 0; j < boxes.size(); ++j)
+      if (overlap(box, boxes[j])) met.push_back(j);
+    if (i >= size_t(statics)) {
+      EXPECT_TRUE(met.empty()) << o.name << " is moving and starts in contact";
+    } else if (!met.empty()) {
+      ++resting;
+      ASSERT_EQ(met.size(), 1u) << o.name << " rests on more than one box";
+      // Sunk by at least a fifth of the smaller extent on some axis (less
+      // only by rounding), and at most the whole box.
+      const Aabb& other = boxes[met[0]];
+      const Eigen::Vector3d depth = box.max.cwiseMin(other.max) - box.min.cwiseMax(other.min);
+      const Eigen::Vector3d smaller = (box.max - box.min).cwiseMin(other.max - other.min);
+      EXPECT_GE((depth.array() / smaller.array()).minCoeff(), 0.2 * (1 - 1e-9)) << o.name;
+    }
+    boxes.push_back(box);
+  }
+  EXPECT_GT(resting, 0.4 * (statics - 1));
+  EXPECT_LT(resting, 0.8 * (statics - 1));
+  // Without it, every box starts apart (the test above would count none).
+  Result<Scene> apart = gen_scene(dir, "", statics, moving, 40);
+  ASSERT_TRUE(apart);
+  boxes.clear();
+  for (const SceneObject& o : apart->objects) {
+    const Aabb box = world_bounds(place(library->info(o.model)->bounds, o.pose));
+    for (const Aabb& b : boxes) EXPECT_FALSE(overlap(box, b)) << o.name;
+    boxes.push_back(box);
+  }
+}
+
 TEST(GenMotion, CameraPathFliesThroughTheWorld) {
   const fs::path& dir = scratch_with_trees();
   Result<Scene> s = gen_scene(dir, "--camera-path 7", 20, 20, 80);
@@ -204,6 +251,8 @@ TEST(GenMotion, BadOptionsAreErrors) {
            {"--rotated-share 1.5", "--rotated-share"},
            {"--spin-share -0.1", "--spin-share"},
            {"--spin-rate -1", "--spin-rate"},
+           {"--resting-share 1.5", "--resting-share"},
+           {"--resting-share nan", "--resting-share"},
            {"--camera-path 1", "--camera-path"},
            {"--camera-path 400", "--camera-path"},  // more keys than frames
        }) {
