@@ -368,8 +368,8 @@ class OCTBAKE_API CollisionWorld {
   std::optional<ObjectHandle> handle_at(uint32_t slot) const;
   // Memory held for pair tests: the records of what each candidate pair was
   // tested on and its contact estimate, 544 bytes each. detect() keeps one
-  // per pair whose roots are not apart and frees those of pairs gone, so
-  // this stays below the pair tests of two consecutive frames.
+  // per pair whose roots are not apart and reuses those of pairs gone, so
+  // this never exceeds the most pair tests two consecutive frames had.
   size_t pair_records() const { return records_.size(); }
 
  private:
