@@ -741,16 +741,20 @@ uint64_t CollisionWorld::refresh_depth(uint32_t i) {
   if (s.area_epoch == epoch_) return 0;
   uint64_t computed = 0;
   // The fixed policy does not look at the area: it is not computed. Neither
-  // does screen when a lower bound already gives the deepest depth (screen
-  // depths never fall as the area grows): near objects cost a bound only.
+  // does screen when bounds already decide the depth (screen depths never
+  // fall as the area grows): when a lower bound gives the deepest depth (near
+  // objects) or an upper bound the same depth as the lower one (far objects,
+  // objects out of view).
   if (settings_.lod.policy == LodPolicy::screen) {  // thesis returned above
     // (An infinite pixel tolerance makes every depth the shallowest: such a
     // world takes the exact path below, with the same result.)
     const OrientedBox box = root_box(i);
     const int deepest = deepest_allowed(settings_.lod, max_depth_of(s));
-    if (depth_for(settings_.lod, pixel_area_lower_bound(view_, box), 0, 0, max_depth_of(s)) == deepest) {
+    const int at_least = depth_for(settings_.lod, pixel_area_lower_bound(view_, box), 0, 0, max_depth_of(s));
+    if (at_least == deepest ||
+        depth_for(settings_.lod, pixel_area_upper_bound(view_, box), 0, 0, max_depth_of(s)) == at_least) {
       s.area = kAreaNotComputed;  // area() computes it if asked
-      s.depth = deepest;
+      s.depth = at_least;
       s.area_epoch = epoch_;
       return 0;
     }

@@ -316,6 +316,41 @@ double pixel_area_lower_bound(const CameraView& view, const OrientedBox& box) {
   return std::isfinite(pixels) ? std::min(pixels * (1 - 1e-9), view.width() * view.height()) : 0.0;
 }
 
+double pixel_area_upper_bound(const CameraView& view, const OrientedBox& box) {
+  if (view.width() <= 0 || view.height() <= 0) return 0;
+  const double full = view.width() * view.height();
+  const Camera& camera = view.camera();
+  const Vec3 rel = box.center - camera.position;
+  const Vec3 c = view.basis() * rel;
+  // A sphere holding the box: radius the L1 norm of the half extents (>= the
+  // half diagonal, and no squares to under- or overflow). Margins of 1e-9 of
+  // the magnitudes cover the rounding of pixel_area's corners.
+  const double r = box.half.cwiseAbs().sum();
+  const double margin = 1e-9 * (c.cwiseAbs().sum() + r);
+  const double near = near_plane(camera.near_plane, rel, box.half);
+  const double tx = view.tan_x(), ty = view.tan_y();
+  const double rx = r * std::sqrt(1 + tx * tx) + margin, ry = r * std::sqrt(1 + ty * ty) + margin;
+  // Wholly outside one plane of the view frustum, as then is every corner:
+  // pixel_area is 0.
+  if (c.z() + r + margin < near || tx * c.z() + c.x() < -rx || tx * c.z() - c.x() < -rx ||
+      ty * c.z() + c.y() < -ry || ty * c.z() - c.y() < -ry)
+    return 0;
+  if (!(c.z() - r - margin > near)) return full;  // reaches the near plane (or encloses the camera)
+  // The box's image lies in that of the cube [c - r, c + r], at z >= zl > 0,
+  // where x / z and y / z are monotone in each coordinate: their extremes are
+  // at the cube's corners. That rectangle, clipped to the viewport
+  // (|x / z| <= tan_x, |y / z| <= tan_y), in pixels.
+  const double zl = c.z() - r, zh = c.z() + r;
+  const auto range = [&](double lo, double hi, double tan) {
+    const double a = std::max(std::min(lo / zl, lo / zh), -tan), b = std::min(std::max(hi / zl, hi / zh), tan);
+    return std::max(b - a, 0.0);
+  };
+  const double pixels =
+      range(c.x() - r, c.x() + r, tx) * (0.5 * view.width() / tx) * range(c.y() - r, c.y() + r, ty) *
+      (0.5 * view.height() / ty);
+  return std::isfinite(pixels) ? std::min(pixels * (1 + 1e-9) + 1e-12 * full, full) : full;
+}
+
 namespace detail {
 double pixel_area_clipped(const Camera& camera, const OrientedBox& box) {
   const CameraView view(camera);

@@ -1,6 +1,7 @@
 // Pixel area per posed box, the per-object cost of the screen and thesis LOD
 // policies: boxes wholly in front of the camera (the projected-hull path),
-// boxes straddling the near plane (3D clipping), and boxes behind the camera.
+// boxes straddling the near plane (3D clipping), and boxes behind the camera;
+// and the lower and upper bounds the screen policy tries first.
 //   build/tests/bench_lod
 #include <benchmark/benchmark.h>
 
@@ -57,6 +58,24 @@ void BM_PixelAreaPreparedView(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_PixelAreaPreparedView)->Arg(0)->Arg(1)->Arg(2);
+
+// The bounds the screen policy tries before the exact area (prepared view):
+// arg 0 the lower bound, 1 the upper bound.
+void BM_PixelAreaBound(benchmark::State& state) {
+  const auto where = static_cast<Placement>(state.range(0));
+  const bool upper = state.range(1) != 0;
+  const std::vector<OrientedBox> in = boxes(where);
+  const CameraView view{Camera{}};
+  size_t k = 0;
+  double sum = 0;
+  for (auto _ : state) {
+    const OrientedBox& b = in[k++ & 1023];
+    sum += upper ? pixel_area_upper_bound(view, b) : pixel_area_lower_bound(view, b);
+    benchmark::DoNotOptimize(sum);
+  }
+  state.SetLabel(upper ? "upper" : "lower");
+}
+BENCHMARK(BM_PixelAreaBound)->ArgsProduct({{0, 1, 2}, {0, 1}});
 
 }  // namespace
 }  // namespace octbake

@@ -136,8 +136,9 @@ enum class AreaRefresh {
   // reaches it; depth() or area() asks) and its pose, the camera or the LOD
   // settings changed since it was last computed. With the fixed and screen
   // policies only those objects are computed, and screen skips the
-  // exact area when pixel_area_lower_bound already gives the deepest depth
-  // (not counted in area_computations); thesis needs every
+  // exact area when pixel_area_lower_bound already gives the deepest depth,
+  // or pixel_area_upper_bound the same depth as the lower bound (not
+  // counted in area_computations); thesis needs every
   // area (its A_min and A_max are global): when anything changed, every live
   // object's area is recomputed, O(objects) per frame.
   on_demand,

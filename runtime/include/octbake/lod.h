@@ -58,6 +58,13 @@ OCTBAKE_API double pixel_area(const CameraView& view, const OrientedBox& box);
 // angle), 0 otherwise. Lets a policy that only needs to know "at least this
 // many pixels" skip the exact area.
 OCTBAKE_API double pixel_area_lower_bound(const CameraView& view, const OrientedBox& box);
+// An upper bound of pixel_area(view, box), as cheap: 0 when a sphere around
+// the box lies wholly outside one plane of the view frustum; else, when that
+// sphere is in front of the near plane, the viewport's part of the image of
+// the cube around it (a rectangle: x / z and y / z are monotone over it);
+// else the whole viewport. Lets a policy that only needs to know "at most
+// this many pixels" (far objects, objects out of view) skip the exact area.
+OCTBAKE_API double pixel_area_upper_bound(const CameraView& view, const OrientedBox& box);
 
 enum class LodPolicy { fixed, thesis, screen };
 inline constexpr LodPolicy kLodPolicies[] = {LodPolicy::fixed, LodPolicy::thesis, LodPolicy::screen};

@@ -244,6 +244,55 @@ TEST(PixelArea, LowerBoundHolds) {
   EXPECT_GT(useful, cases / 20);
 }
 
+// The bound around the box's sphere never falls below the area; it is 0 for
+// many boxes out of view and well below the viewport for many far ones (else
+// it would be useless).
+TEST(PixelArea, UpperBoundHolds) {
+  std::mt19937 rng(93);
+  int zero = 0, below_full = 0, cases = 0;
+  for (int run = 0; run < 20000; ++run) {
+    const auto [cam, box] = random_view(rng, run);
+    const CameraView view(cam);
+    const double bound = pixel_area_upper_bound(view, box), area = pixel_area(view, box);
+    const double full = double(cam.viewport_w) * cam.viewport_h;
+    ASSERT_GE(bound, area) << "run " << run;
+    ASSERT_LE(bound, full) << "run " << run;
+    ++cases;
+    zero += bound == 0;
+    below_full += bound > 0 && bound < 0.5 * full;
+  }
+  EXPECT_GT(zero, cases / 20);
+  EXPECT_GT(below_full, cases / 20);
+}
+
+// Boxes just outside a side of the view, a hair off: the bound stays above
+// the area whichever way the corners round.
+TEST(PixelArea, UpperBoundAtTheEdgesOfTheView) {
+  std::mt19937 rng(95);
+  int straddle = 0;
+  for (int run = 0; run < 20000; ++run) {
+    Camera cam;
+    cam.position = random_vector(rng, 50);
+    cam.look_at = cam.position + random_vector(rng, 1);
+    cam.up = random_vector(rng, 1);
+    cam.viewport_w = 64 + int(rng() % 512), cam.viewport_h = 64 + int(rng() % 512);
+    cam.fov_y_deg = 20 + double(rng() % 120);
+    const CameraView view(cam);
+    // A box centred on a random direction at the edge of the frustum.
+    const double z = std::ldexp(1.0 + double(rng() % 1000) / 1000, int(rng() % 20) - 5);
+    const double side = (rng() % 2 ? 1 : -1) * (rng() % 2 ? view.tan_x() : view.tan_y());
+    Eigen::Vector3d local(0, 0, z);
+    local[rng() % 2 ? 0 : 1] = side * z * (1 + (double(rng() % 2001) - 1000) * 1e-12);
+    OrientedBox box;
+    box.center = cam.position + view.basis().transpose() * local;
+    box.half = Eigen::Vector3d::Constant(z * std::ldexp(1.0, -int(rng() % 30)));
+    const double bound = pixel_area_upper_bound(view, box), area = pixel_area(view, box);
+    ASSERT_GE(bound, area) << "run " << run;
+    straddle += area > 0;
+  }
+  EXPECT_GT(straddle, 100);
+}
+
 // Pixel area is a ratio of lengths: scaling the camera, the box and the near
 // plane by a power of two (exact) must not change it, nor the lower bound,
 // down to 2^-1000 and up to 2^1000, where squared lengths under- or
@@ -256,6 +305,7 @@ TEST(PixelArea, ScaleFreeAtTheExtremesOfDouble) {
     if (cam.near_plane == 0) continue;  // a tiny positive near plane does not scale
     const CameraView view(cam);
     const double area = pixel_area(view, box), bound = pixel_area_lower_bound(view, box);
+    const double upper = pixel_area_upper_bound(view, box);
     const double full = double(cam.viewport_w) * cam.viewport_h;
     visible += area > 1;
     for (const int e : {-100, 100, -1000, -600, 600, 1000}) {
@@ -267,6 +317,7 @@ TEST(PixelArea, ScaleFreeAtTheExtremesOfDouble) {
       const CameraView v(c);
       EXPECT_NEAR(pixel_area(v, b), area, 1e-9 * full) << "run " << run << ", scale 2^" << e;
       EXPECT_NEAR(pixel_area_lower_bound(v, b), bound, 1e-9 * full) << "run " << run << ", scale 2^" << e;
+      EXPECT_NEAR(pixel_area_upper_bound(v, b), upper, 1e-9 * full) << "run " << run << ", scale 2^" << e;
     }
   }
   EXPECT_GT(visible, 100);
