@@ -330,12 +330,15 @@ double pixel_area_upper_bound(const CameraView& view, const OrientedBox& box) {
   const double near = near_plane(camera.near_plane, rel, box.half);
   const double tx = view.tan_x(), ty = view.tan_y();
   const double rx = r * std::sqrt(1 + tx * tx) + margin, ry = r * std::sqrt(1 + ty * ty) + margin;
+  // The cube around the sphere holds the camera: the box may enclose it
+  // (pixel_area: the whole viewport), even wholly behind a near plane.
+  if (c.cwiseAbs().maxCoeff() <= r + margin) return full;
   // Wholly outside one plane of the view frustum, as then is every corner:
   // pixel_area is 0.
   if (c.z() + r + margin < near || tx * c.z() + c.x() < -rx || tx * c.z() - c.x() < -rx ||
       ty * c.z() + c.y() < -ry || ty * c.z() - c.y() < -ry)
     return 0;
-  if (!(c.z() - r - margin > near)) return full;  // reaches the near plane (or encloses the camera)
+  if (!(c.z() - r - margin > near)) return full;  // reaches the near plane
   // The box's image lies in that of the cube [c - r, c + r], at z >= zl > 0,
   // where x / z and y / z are monotone in each coordinate: their extremes are
   // at the cube's corners. That rectangle, clipped to the viewport

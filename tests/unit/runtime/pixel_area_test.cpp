@@ -265,6 +265,23 @@ TEST(PixelArea, UpperBoundHolds) {
   EXPECT_GT(below_full, cases / 20);
 }
 
+// A box around the camera fills the viewport even when the near plane lies
+// beyond it; the upper bound must say so (not 0 for "behind the near plane").
+TEST(PixelArea, UpperBoundOfABoxAroundTheCamera) {
+  Camera cam;
+  cam.position = {0, 0, 0};
+  cam.look_at = {0, 0, -1};
+  cam.near_plane = 5;
+  cam.viewport_w = 320, cam.viewport_h = 200;
+  const CameraView view(cam);
+  for (const double size : {1e-3, 0.5, 2.0}) {
+    const OrientedBox box = make_box({0.1 * size, -0.2 * size, 0.3 * size}, Eigen::Vector3d::Constant(size));
+    const double area = pixel_area(view, box);
+    EXPECT_EQ(area, 320.0 * 200.0) << size;
+    EXPECT_GE(pixel_area_upper_bound(view, box), area) << size;
+  }
+}
+
 // Boxes just outside a side of the view, a hair off: the bound stays above
 // the area whichever way the corners round.
 TEST(PixelArea, UpperBoundAtTheEdgesOfTheView) {
