@@ -909,9 +909,11 @@ void CollisionWorld::find_apart(size_t begin, size_t end) {
 // before the pair tests: each record then belongs to one pair, which alone
 // writes it.
 void CollisionWorld::assign_records() {
-  if (!settings_.coherence) {  // nothing is kept from last frame
-    records_.clear();
-    free_records_.clear();
+  if (!settings_.coherence) {  // nothing is kept from last frame: the records in pair order
+    uint32_t used = 0;
+    for (PairResult& r : results_) r.record = r.apart ? kNone : used++;
+    if (records_.size() < used) records_.resize(used);
+    return;
   }
   for (PairResult& r : results_) {
     if (r.apart) {

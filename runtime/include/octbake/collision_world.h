@@ -475,7 +475,7 @@ class OCTBAKE_API CollisionWorld {
     bool apart = false;  // roots_apart, and last frame no hit: test is one box test, a miss
     bool reused = false;  // test and estimate are last's, with 0 box tests
   };
-  struct TestRecord {  // read only by the pair that wrote it, in the next frame
+  struct TestRecord {  // read and written only for the pair that holds it
     PlacedTree a, b;  // the placements last tested
     ContactEstimate estimate;  // with that test's hit
   };
