@@ -232,6 +232,7 @@ class OCTBAKE_API WorldTree {
     const uint32_t* data() const { return on_heap() ? heap_ : in_; }
     size_t size() const { return size_; }
     bool empty() const { return size_ == 0; }
+    bool in_place() const { return cap_ <= kInline; }  // data() is inside this object
     const uint32_t* begin() const { return data(); }
     const uint32_t* end() const { return data() + size_; }
     void insert_sorted(uint32_t id);
