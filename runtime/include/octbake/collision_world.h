@@ -481,6 +481,7 @@ class OCTBAKE_API CollisionWorld {
   };
   std::vector<std::pair<uint32_t, uint32_t>> pair_room_, spilled_pairs_;  // collect_pairs: the scan's room, overflow
   std::vector<uint32_t> stale_;  // objects in pairs whose depth is stale
+  std::vector<uint64_t> stale_bits_;  // detect()'s marks for stale_: a bit per slot, all clear between frames
   // commit_poses scratch: per dirty_ entry, whether its cells change.
   enum : uint8_t { kUnmoved, kMoved };
   std::vector<uint8_t> move_flags_;
