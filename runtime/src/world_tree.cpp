@@ -482,9 +482,9 @@ struct BoxesOverlap {
   std::span<const Aabb> boxes;
   bool operator()(uint32_t a, uint32_t b) const {
     const Aabb &x = boxes[a], &y = boxes[b];
-    bool all = true;
-    for (int k = 0; k < 3; ++k) all &= (x.min[k] <= y.max[k]) & (y.min[k] <= x.max[k]);
-    return all;
+    int all = 1;
+    for (int k = 0; k < 3; ++k) all &= int(x.min[k] <= y.max[k]) & int(y.min[k] <= x.max[k]);
+    return all != 0;
   }
 };
 
