@@ -739,6 +739,8 @@ uint64_t CollisionWorld::refresh_depth(uint32_t i) {
   if (settings_.lod.policy == LodPolicy::thesis) return refresh_all_thesis();
   Slot& s = slots_[i];
   if (s.area_epoch == epoch_) return 0;
+  const int max_depth = max_depth_of(s);
+  const auto depth_at = [&](double area) { return depth_for(settings_.lod, area, 0, 0, max_depth); };
   uint64_t computed = 0;
   // The fixed policy does not look at the area: it is not computed. Neither
   // does screen when bounds already decide the depth (screen depths never
@@ -749,10 +751,9 @@ uint64_t CollisionWorld::refresh_depth(uint32_t i) {
     // (An infinite pixel tolerance makes every depth the shallowest: such a
     // world takes the exact path below, with the same result.)
     const OrientedBox box = root_box(i);
-    const int deepest = deepest_allowed(settings_.lod, max_depth_of(s));
-    const int at_least = depth_for(settings_.lod, pixel_area_lower_bound(view_, box), 0, 0, max_depth_of(s));
-    if (at_least == deepest ||
-        depth_for(settings_.lod, pixel_area_upper_bound(view_, box), 0, 0, max_depth_of(s)) == at_least) {
+    const int at_least = depth_at(pixel_area_lower_bound(view_, box));
+    if (at_least == deepest_allowed(settings_.lod, max_depth) ||
+        depth_at(pixel_area_upper_bound(view_, box)) == at_least) {
       s.area = kAreaNotComputed;  // area() computes it if asked
       s.depth = at_least;
       s.area_epoch = epoch_;
@@ -761,7 +762,7 @@ uint64_t CollisionWorld::refresh_depth(uint32_t i) {
     s.area = pixel_area(view_, box);
     computed = 1;
   }
-  s.depth = depth_for(settings_.lod, s.area, 0, 0, max_depth_of(s));
+  s.depth = depth_at(s.area);
   s.area_epoch = epoch_;
   return computed;
 }
