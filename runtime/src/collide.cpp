@@ -5,6 +5,7 @@
 // The plain reference descent lives at the end of this file.
 #include "octbake/collide.h"
 #include "octbake/format.h"
+#include "nearest_first.h"
 
 #include <algorithm>
 #include <array>
@@ -40,10 +41,11 @@ constexpr double kAxisPad = 1e-9;
 // The product is exact unless it is subnormal, and then the two sums can
 // differ only where |p| < 2^-967 (a rounding boundary within 2^-1075 of p +
 // o 2^-d needs p's spacing below 2^-1020): such a value is never above a
-// radius, and its square (the nearest-first key) is 0 either way. So every
+// radius, and the nearest-first order takes it as 0 (kOrderFloor). So every
 // build gives the same hits, counts and leaf pairs (tested down to offsets
 // of 1e-320).
 constexpr double kMinPad = 0x1p-900;
+constexpr double kOrderFloor = 0x1p-967;
 
 using Coord = std::array<uint16_t, 3>;
 
@@ -307,56 +309,6 @@ struct Portable {
       store<kStoreLanes>(out + k, x + y * scale);
     }
   }
-
-  // The nearest-first keys of the 8 children: key[j] = the squared length of
-  // lanes 0..2 of child j's projections, p[k] + centre[k][j] * scale.
-  [[gnu::always_inline]] static void keys(double* key, const double* p, const double (*centre)[8], double scale) {
-    for (int h = 0; h < 8; h += kStoreLanes) {
-      V x, y, z;
-      load<kStoreLanes>(x, centre[0] + h);
-      load<kStoreLanes>(y, centre[1] + h);
-      load<kStoreLanes>(z, centre[2] + h);
-      x = p[0] + x * scale, y = p[1] + y * scale, z = p[2] + z * scale;
-      store<kStoreLanes>(key + h, (x * x + y * y) + z * z);
-    }
-  }
-
-  // Nearest first: order[0..) = the octants of `hits`, by key[octant]
-  // ascending, ties in octant order (a stable sort). Returns how many.
-  // Each rank counts the keys of `hits` below key[j] and the equal ones of
-  // lower octants, kStoreLanes at a time with no branch: a lane's mask is -1
-  // where it counts, so the count is minus the masks' sum.
-  [[gnu::always_inline]] static int nearest_order(const double* key, uint32_t hits, uint8_t* order) {
-    constexpr int kKeyChunks = 8 / kStoreLanes;
-    V k[kKeyChunks];
-    M in_hits[kKeyChunks];
-    int64_t lanes[8];
-    for (int i = 0; i < 8; ++i) lanes[i] = -int64_t((hits >> i) & 1u);
-    std::memcpy(in_hits, lanes, sizeof lanes);
-    for (int c = 0; c < kKeyChunks; ++c) load<kStoreLanes>(k[c], key + kStoreLanes * c);
-    int m = 0;
-    for (uint32_t rest = hits; rest != 0; rest &= rest - 1) {
-      const int j = std::countr_zero(rest);
-      const V kj = V{} + key[j];
-      M lower[kKeyChunks];  // the lanes of octants below j
-      std::memcpy(lower, kLowerLanes[size_t(j)].data(), sizeof lower);
-      M count{};
-      for (int c = 0; c < kKeyChunks; ++c) count += ((k[c] < kj) | ((k[c] == kj) & lower[c])) & in_hits[c];
-      int64_t rank = 0;
-      for (int i = 0; i < kStoreLanes; ++i) rank -= count[i];
-      order[rank] = uint8_t(j);
-      ++m;
-    }
-    return m;
-  }
-
-  // kLowerLanes[j][i] = -1 where i < j, else 0.
-  static constexpr auto kLowerLanes = [] {
-    std::array<std::array<int64_t, 8>, 8> t{};
-    for (int j = 0; j < 8; ++j)
-      for (int i = 0; i < j; ++i) t[size_t(j)][size_t(i)] = -1;
-    return t;
-  }();
 };
 
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
@@ -379,18 +331,6 @@ struct Avx2 {
     for (int k = 0; k < kLanes; k += 4)
       _mm256_storeu_pd(out + k, _mm256_fmadd_pd(_mm256_loadu_pd(b + k), s, _mm256_loadu_pd(a + k)));
   }
-  [[gnu::target("avx2,fma")]] static void keys(double* key, const double* p, const double (*centre)[8],
-                                               double scale) {
-    const __m256d s = _mm256_set1_pd(scale);
-    for (int h = 0; h < 8; h += 4) {
-      const __m256d x = _mm256_fmadd_pd(_mm256_loadu_pd(centre[0] + h), s, _mm256_set1_pd(p[0]));
-      const __m256d y = _mm256_fmadd_pd(_mm256_loadu_pd(centre[1] + h), s, _mm256_set1_pd(p[1]));
-      const __m256d z = _mm256_fmadd_pd(_mm256_loadu_pd(centre[2] + h), s, _mm256_set1_pd(p[2]));
-      _mm256_storeu_pd(key + h,
-                       _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(x, x), _mm256_mul_pd(y, y)), _mm256_mul_pd(z, z)));
-    }
-  }
-
   template <bool kScale>
   [[gnu::target("avx2,fma")]] static uint32_t children_overlap(const double* parent, const double* radius,
                                                          const Lanes* offset, double scale, const uint8_t* octant,
@@ -427,24 +367,6 @@ struct Avx2 {
     }
     return _mm256_testz_pd(separated, separated);
   }
-
-  // As Portable::nearest_order: each rank counts the keys below (and the
-  // equal ones of lower octants) with two vector comparisons per half.
-  [[gnu::target("avx2")]] static int nearest_order(const double* key, uint32_t hits, uint8_t* order) {
-    const __m256d k0 = _mm256_loadu_pd(key), k1 = _mm256_loadu_pd(key + 4);
-    int m = 0;
-    for (uint32_t rest = hits; rest != 0; rest &= rest - 1) {
-      const int j = std::countr_zero(rest);
-      const __m256d kj = _mm256_broadcast_sd(key + j);
-      const uint32_t below = uint32_t(_mm256_movemask_pd(_mm256_cmp_pd(k0, kj, _CMP_LT_OQ))) |
-                             uint32_t(_mm256_movemask_pd(_mm256_cmp_pd(k1, kj, _CMP_LT_OQ))) << 4;
-      const uint32_t equal = uint32_t(_mm256_movemask_pd(_mm256_cmp_pd(k0, kj, _CMP_EQ_OQ))) |
-                             uint32_t(_mm256_movemask_pd(_mm256_cmp_pd(k1, kj, _CMP_EQ_OQ))) << 4;
-      order[std::popcount((below | (equal & ((1u << j) - 1))) & hits)] = uint8_t(j);
-      ++m;
-    }
-    return m;
-  }
 };
 
 struct Avx512 {
@@ -461,15 +383,6 @@ struct Avx512 {
     for (int k = 0; k < kLanes; k += 8)
       _mm512_storeu_pd(out + k, _mm512_fmadd_pd(_mm512_loadu_pd(b + k), s, _mm512_loadu_pd(a + k)));
   }
-  [[gnu::target("avx512f")]] static void keys(double* key, const double* p, const double (*centre)[8],
-                                              double scale) {
-    const __m512d s = _mm512_set1_pd(scale);
-    const __m512d x = _mm512_fmadd_pd(_mm512_loadu_pd(centre[0]), s, _mm512_set1_pd(p[0]));
-    const __m512d y = _mm512_fmadd_pd(_mm512_loadu_pd(centre[1]), s, _mm512_set1_pd(p[1]));
-    const __m512d z = _mm512_fmadd_pd(_mm512_loadu_pd(centre[2]), s, _mm512_set1_pd(p[2]));
-    _mm512_storeu_pd(key, _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(x, x), _mm512_mul_pd(y, y)), _mm512_mul_pd(z, z)));
-  }
-
   template <bool kScale>
   [[gnu::target("avx512f")]] static uint32_t children_overlap(const double* parent, const double* radius,
                                                             const Lanes* offset, double scale,
@@ -496,10 +409,6 @@ struct Avx512 {
     const __m512d q = _mm512_add_pd(_mm512_loadu_pd(p + k), _mm512_loadu_pd(offset + k));
     return _mm512_cmp_pd_mask(_mm512_abs_pd(q), _mm512_loadu_pd(radius + k), _CMP_GT_OQ) == 0;
   }
-
-  [[gnu::target("avx512f")]] static int nearest_order(const double* key, uint32_t hits, uint8_t* order) {
-    return Avx2::nearest_order(key, hits, order);
-  }
 };
 #endif
 
@@ -513,9 +422,6 @@ struct LaneTables {
   // Offsets of the 8 children at depth 1, octant order, per tree (filled when
   // the tree first splits): at depth d they are these times 2^(1-d), exactly.
   alignas(64) Lanes offset_a[8], offset_b[8];
-  // Their lanes 0..2 by octant (centre_a[k][j] = offset_a[j][k]): collide only,
-  // filled when first needed to rank children.
-  alignas(64) double centre_a[3][8], centre_b[3][8];
   // Radius of a padded box on every axis at depth d: base * 2^-d + padding.
   alignas(64) Lanes base_a, base_b, padding_a, padding_b;
 };
@@ -726,6 +632,12 @@ class PairFrame {
     store_groups(t_.padding_b, ((ac[0] + ac[1]) + ac[2]) * pad, pads, cross_pad_b[0], cross_pad_b[1],
                  cross_pad_b[2]);
     // For the split schedule (fill_level): half diagonals in A's units.
+    // Depth-1 steps u_k: A's child at +q moves t by -q; B's axis k is s R e_k.
+    for (int k = 0; k < 3; ++k)
+      for (int m = 0; m < 3; ++m) {
+        steps_a_[k][m] = m == k ? -0.25 * a_size_[k] : 0.0;
+        steps_b_[k][m] = 0.25 * b_size_[k] * rel_.sr(m, k);
+      }
     size_a_ = (0.5 * a_size_).squaredNorm();
     size_b_ = (0.5 * rel_.s * b_size_).squaredNorm();
     tree_a_ = a.tree;
@@ -793,10 +705,14 @@ class PairFrame {
     return K::template children_overlap<!kScaled>(parent, t.radius, t.offset, t.scale, octant, n);
   }
 
-  // Lanes 0..2 of the depth-1 offsets of the tree split at lv, by octant:
-  // centre[k][octant] (for the nearest-first keys).
-  const double (*centres(const Level& lv) const)[8] {
-    return lv.split_a ? centres(t_.centre_a, t_.offset_a, 4u) : centres(t_.centre_b, t_.offset_b, 8u);
+  // w_k = p . u_k (see NearestTables) for the tree split at lv, summed in
+  // the order of m, with p's lanes below kOrderFloor as 0: the same bits in
+  // every build.
+  void nearest_weights(const double* p, const Level& lv, double (&w)[3]) const {
+    const double(&u)[3][3] = lv.split_a ? steps_a_ : steps_b_;
+    double c[3];
+    for (int m = 0; m < 3; ++m) c[m] = std::abs(p[m]) < kOrderFloor ? 0.0 : p[m];
+    for (int k = 0; k < 3; ++k) w[k] = (c[0] * u[k][0] + c[1] * u[k][1]) + c[2] * u[k][2];
   }
 
  private:
@@ -847,37 +763,6 @@ class PairFrame {
       }
     }
     ++known_levels_;
-  }
-
-  // centre[k][j] = offset[j][k], k < 3 (two 4x4 transpositions), filled once
-  // (flag `bit` of filled_offsets_). Rows stored 8 lanes at once: the AVX-512
-  // build reads them so, and a load spanning two stores waits for them.
-  const double (*centres(double (*centre)[8], const Lanes* offset, uint32_t bit) const)[8] {
-    if (!(filled_offsets_ & bit)) {
-      v4d row[2][3];  // [octants h..h+3][k]
-      for (int h = 0; h < 2; ++h) {
-        v4d r0, r1, r2, r3;
-        load<4>(r0, offset[4 * h]);
-        load<4>(r1, offset[4 * h + 1]);
-        load<4>(r2, offset[4 * h + 2]);
-        load<4>(r3, offset[4 * h + 3]);
-        const v4d t0 = __builtin_shufflevector(r0, r1, 0, 4, 2, 6), t1 = __builtin_shufflevector(r0, r1, 1, 5, 3, 7);
-        const v4d t2 = __builtin_shufflevector(r2, r3, 0, 4, 2, 6), t3 = __builtin_shufflevector(r2, r3, 1, 5, 3, 7);
-        row[h][0] = __builtin_shufflevector(t0, t2, 0, 1, 4, 5);
-        row[h][1] = __builtin_shufflevector(t1, t3, 0, 1, 4, 5);
-        row[h][2] = __builtin_shufflevector(t0, t2, 2, 3, 6, 7);
-      }
-      for (int k = 0; k < 3; ++k) {
-        if constexpr (W == 8) {
-          store<8>(centre[k], __builtin_shufflevector(row[0][k], row[1][k], 0, 1, 2, 3, 4, 5, 6, 7));
-        } else {
-          store<4>(centre[k], row[0][k]);
-          store<4>(centre[k] + 4, row[1][k]);
-        }
-      }
-      filled_offsets_ |= bit;
-    }
-    return centre;
   }
 
   // The projection matrix in chunks: w[m][c] = lanes W c..W c + W - 1 of t_.w[m].
@@ -938,6 +823,7 @@ class PairFrame {
   Relative rel_;
   Eigen::Vector3d a_min_, b_min_, a_size_, b_size_;  // root sizes
   double size_a_, size_b_;  // squared half diagonals in A's units
+  double steps_a_[3][3], steps_b_[3][3];  // [k]: u_k, nearest first
   const ObjectTree *tree_a_, *tree_b_;
   int depth_a_, depth_b_;
   // Filled lazily (the frame is used by one descent only).
@@ -990,9 +876,9 @@ template <class K, class OnLeaf>
     Packed coord[2];     // A's, B's
     uint32_t index[2];   // level indices, A's, B's
     uint32_t first;      // first child of the split box
-    uint8_t next, count;  // children to visit: order[next..count)
-    uint8_t order[8];     // their octants, visiting order
-    uint8_t mask;         // the split box's child mask
+    uint32_t order;      // the 8 octants in visiting order, 3 bits each
+    uint32_t left;       // bit i: order's i-th is still to visit
+    uint8_t mask;        // the split box's child mask
   };
   Open open[kPathLevels + 1];
   frame.project({0, 0, 0}, 0, {0, 0, 0}, 0, open[0].p);
@@ -1033,45 +919,29 @@ template <class K, class OnLeaf>
     const int count = kOctants.count[mask];
     const uint32_t hits = PairFrame<K>::template children_overlap<false>(lv, o.p, kOctants.octant[mask], count);
     box_tests += uint64_t(count);
-    o.next = o.count = 0;
+    o.left = 0;
     if (hits != 0) {
-      // Squared centre distances of the children by octant (lanes 0..2: the
-      // offset in A's axes), the same sums as the kernel's (by octant); only
-      // needed to rank two or more.
-      alignas(32) double key[8];
-      const bool ranked = (hits & (hits - 1)) != 0;
-      if (ranked) {
-        K::keys(key, o.p, frame.centres(lv), lv.scale);
+      if ((hits & (hits - 1)) == 0) {  // one child
+        o.order = uint32_t(std::countr_zero(hits));
+        o.left = 1;
+      } else {
+        double w[3];
+        frame.nearest_weights(o.p, lv, w);
+        nearest_first(w, hits, o.order, o.left);
       }
-      const auto report = [&](int j) {
-        const Packed grown = child_of(o.coord[side], uint8_t(j));
-        lv.split_a ? on_leaf(unpack(grown), unpack(o.coord[1])) : on_leaf(unpack(o.coord[0]), unpack(grown));
-      };
       if (l + 1 == levels) {
-        // The children are leaf pairs: the nearest is reported here (ties in
-        // octant order).
+        // The children are leaf pairs: the nearest is reported here.
         result.hit = true;
-        int best = std::countr_zero(hits);
-        for (uint32_t rest = hits & (hits - 1); rest != 0; rest &= rest - 1) {
-          const int j = std::countr_zero(rest);
-          if (key[j] < key[best]) best = j;
-        }
-        report(best);
+        const Packed grown = child_of(o.coord[side], uint8_t((o.order >> (3 * std::countr_zero(o.left))) & 7u));
+        lv.split_a ? on_leaf(unpack(grown), unpack(o.coord[1])) : on_leaf(unpack(o.coord[0]), unpack(grown));
         result.box_tests = box_tests;
         return;
-      } else {
-        int m = 1;
-        if (ranked)
-          m = K::nearest_order(key, hits, o.order);
-        else  // one child
-          o.order[0] = uint8_t(std::countr_zero(hits));
-        o.count = uint8_t(m);
-        o.first = lv.first_child[index];
-        o.mask = mask;
       }
+      o.first = lv.first_child[index];
+      o.mask = mask;
     }
     // Back to the deepest level with a child left to visit.
-    for (; top->next == top->count; --l)
+    for (; top->left == 0; --l)
       if (top-- == open) {
         result.box_tests = box_tests;
         return;
@@ -1080,7 +950,8 @@ template <class K, class OnLeaf>
     const Level& plv = frame.known_level(l);
     Open& child = *++top;
     ++l;
-    const uint8_t j = parent.order[parent.next++];
+    const uint8_t j = uint8_t((parent.order >> (3 * std::countr_zero(parent.left))) & 7u);
+    parent.left &= parent.left - 1;
     const int split = plv.split_a ? 0 : 1;
     K::add_scaled(child.p, parent.p, plv.offset[j], plv.scale);
     child.index[0] = parent.index[0], child.index[1] = parent.index[1];
