@@ -3,6 +3,7 @@
 // children's distances.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 
@@ -19,17 +20,19 @@ namespace octbake {
 // none, a, b, then a+b and c (either way round), a+c, b+c, a+b+c. One of 12
 // orders, picked with no branch and no per-child key.
 struct NearestTables {
-  uint8_t sorted[8][3];        // [sorting code]: the axes by |w|, ascending (ties: lower axis first)
   uint32_t flips[16];          // [code * 2 + (a + b > c)]: the 8 flip sets in visiting order, 3 bits each
   uint8_t positions[16][256];  // [order][flipped hits]: bit i set iff flip set i is among them
   uint8_t flipped[8][256];     // [nearest][hits]: bit f set iff octant nearest ^ f is in hits
-  constexpr NearestTables() : sorted{}, flips{}, positions{}, flipped{} {
+  constexpr NearestTables() : flips{}, positions{}, flipped{} {
     for (int code = 0; code < 8; ++code) {
-      // code: bit 0 |w1| < |w0|, bit 1 |w2| < |w0|, bit 2 |w2| < |w1|.
+      // code: bit 0 |w1| < |w0|, bit 1 |w2| < |w0|, bit 2 |w2| < |w1|. The
+      // axes by |w|, ascending, ties lower axis first (codes 2 and 5 cannot
+      // occur).
       const int c01 = code & 1, c02 = (code >> 1) & 1, c12 = (code >> 2) & 1;
       const int rank[3] = {c01 + c02, (1 - c01) + c12, (1 - c02) + (1 - c12)};
-      for (int k = 0; k < 3; ++k) sorted[code][rank[k] % 3] = uint8_t(k);  // codes 2 and 5 cannot occur
-      const int x = 1 << sorted[code][0], y = 1 << sorted[code][1], z = 1 << sorted[code][2];
+      int sorted[3] = {};
+      for (int k = 0; k < 3; ++k) sorted[rank[k] % 3] = k;
+      const int x = 1 << sorted[0], y = 1 << sorted[1], z = 1 << sorted[2];
       for (int swap = 0; swap < 2; ++swap) {
         const int order[8] = {0, x, y, swap ? z : x | y, swap ? x | y : z, x | z, y | z, 7};
         uint32_t f = 0;
@@ -55,9 +58,11 @@ inline constexpr NearestTables kNearest;
                                                  uint32_t& left) {
   const double a0 = std::abs(w[0]), a1 = std::abs(w[1]), a2 = std::abs(w[2]);
   const uint32_t code = uint32_t(a1 < a0) | uint32_t(a2 < a0) << 1 | uint32_t(a2 < a1) << 2;
-  const double a[3] = {a0, a1, a2};
-  const uint8_t* s = kNearest.sorted[code];
-  const uint32_t id = code * 2 + uint32_t(a[s[0]] + a[s[1]] > a[s[2]]);
+  // The sorted sizes by min and max (in registers: indexing an array of
+  // them by `sorted` would store and reload them).
+  const double lo = std::min(std::min(a0, a1), a2), hi = std::max(std::max(a0, a1), a2);
+  const double mid = std::max(std::min(a0, a1), std::min(std::max(a0, a1), a2));
+  const uint32_t id = code * 2 + uint32_t(lo + mid > hi);
   const uint32_t nearest = uint32_t(w[0] < 0) | uint32_t(w[1] < 0) << 1 | uint32_t(w[2] < 0) << 2;
   order = kNearest.flips[id] ^ (nearest * 0x249249u);
   left = kNearest.positions[id][kNearest.flipped[nearest][hits]];
