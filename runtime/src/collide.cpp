@@ -631,13 +631,14 @@ class PairFrame {
                  cross_b[2]);
     store_groups(t_.padding_b, ((ac[0] + ac[1]) + ac[2]) * pad, pads, cross_pad_b[0], cross_pad_b[1],
                  cross_pad_b[2]);
-    // For the split schedule (fill_level): half diagonals in A's units.
-    // Depth-1 steps u_k: A's child at +q moves t by -q; B's axis k is s R e_k.
+    // Depth-1 steps u_k (nearest_weights): A's child at +q moves t by -q;
+    // B's axis k is s R e_k.
     for (int k = 0; k < 3; ++k)
       for (int m = 0; m < 3; ++m) {
         steps_a_[k][m] = m == k ? -0.25 * a_size_[k] : 0.0;
         steps_b_[k][m] = 0.25 * b_size_[k] * rel_.sr(m, k);
       }
+    // For the split schedule (fill_level): half diagonals in A's units.
     size_a_ = (0.5 * a_size_).squaredNorm();
     size_b_ = (0.5 * rel_.s * b_size_).squaredNorm();
     tree_a_ = a.tree;

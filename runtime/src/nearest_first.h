@@ -58,8 +58,8 @@ inline constexpr NearestTables kNearest;
                                                  uint32_t& left) {
   const double a0 = std::abs(w[0]), a1 = std::abs(w[1]), a2 = std::abs(w[2]);
   const uint32_t code = uint32_t(a1 < a0) | uint32_t(a2 < a0) << 1 | uint32_t(a2 < a1) << 2;
-  // The sorted sizes by min and max (in registers: indexing an array of
-  // them by `sorted` would store and reload them).
+  // The sizes sorted by min and max, in registers (an array of them indexed
+  // by the sort would be stored and reloaded).
   const double lo = std::min(std::min(a0, a1), a2), hi = std::max(std::max(a0, a1), a2);
   const double mid = std::max(std::min(a0, a1), std::min(std::max(a0, a1), a2));
   const uint32_t id = code * 2 + uint32_t(lo + mid > hi);
