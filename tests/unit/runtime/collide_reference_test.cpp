@@ -125,16 +125,31 @@ TEST(CollideReference, EveryKernelBuildGivesTheSameBits) {
   EXPECT_LT(hits, kRuns * 7 / 10);
 }
 
+// collide(a, b) in every kernel build this CPU runs: the same hit, box tests
+// and leaf pair, and a hit wherever the scalar reference finds one. `hit`:
+// the hit.
+void expect_builds_agree(const PlacedTree& a, const PlacedTree& b, int run, bool& hit) {
+  std::vector<PairTest> results;
+  for (const BoxKernel k : {BoxKernel::portable, BoxKernel::avx2, BoxKernel::avx512})
+    if (use_box_kernel(k)) results.push_back(collide(a, b));
+  ASSERT_TRUE(use_box_kernel(BoxKernel::best));
+  for (size_t k = 1; k < results.size(); ++k) {
+    ASSERT_EQ(results[k].hit, results[0].hit) << "run " << run;
+    ASSERT_EQ(results[k].box_tests, results[0].box_tests) << "run " << run;
+    ASSERT_EQ(key(results[k].leaf), key(results[0].leaf)) << "run " << run;
+  }
+  if (collide_reference(a, b).hit) {
+    ASSERT_TRUE(results[0].hit) << "run " << run;
+  }
+  hit = results[0].hit;
+}
+
 // Near-axis-aligned rotations (angles 1e-320..1e-270 rad) and B up to 1e-300
 // times A's size give child offsets near and below the subnormal range, where
 // a product with 2^-d may round: every build still gives the same bits (the
 // AVX-512 build fuses those products with the sums), and no pair the scalar
 // reference finds touching is missed.
 TEST(CollideReference, EveryKernelBuildAgreesOnSubnormalOffsets) {
-  std::vector<BoxKernel> kernels;
-  for (const BoxKernel k : {BoxKernel::portable, BoxKernel::avx2, BoxKernel::avx512})
-    if (use_box_kernel(k)) kernels.push_back(k);
-  ASSERT_TRUE(use_box_kernel(BoxKernel::best));
   std::mt19937 rng(33);
   const auto tiny_rotation = [&] {
     const double angle = std::pow(10.0, -270 - 50 * uniform01(rng));
@@ -150,21 +165,9 @@ TEST(CollideReference, EveryKernelBuildAgreesOnSubnormalOffsets) {
     pb.scale = run % 2 == 0 ? std::pow(10.0, -300 * uniform01(rng)) : 0.5 + uniform01(rng);
     pb.position = Eigen::Vector3d(uniform01(rng), uniform01(rng), uniform01(rng)) - Eigen::Vector3d::Constant(0.5);
     const PlacedTree a{&ta, pa, depth_a}, b{&tb, pb, depth_b};
-    std::vector<PairTest> results;
-    for (const BoxKernel k : kernels) {
-      ASSERT_TRUE(use_box_kernel(k));
-      results.push_back(collide(a, b));
-    }
-    ASSERT_TRUE(use_box_kernel(BoxKernel::best));
-    for (size_t k = 1; k < results.size(); ++k) {
-      ASSERT_EQ(results[k].hit, results[0].hit) << "run " << run;
-      ASSERT_EQ(results[k].box_tests, results[0].box_tests) << "run " << run;
-      ASSERT_EQ(key(results[k].leaf), key(results[0].leaf)) << "run " << run;
-    }
-    if (collide_reference(a, b).hit) {
-      ASSERT_TRUE(results[0].hit) << "run " << run;
-    }
-    hits += results[0].hit;
+    bool hit = false;
+    ASSERT_NO_FATAL_FAILURE(expect_builds_agree(a, b, run, hit));
+    hits += hit;
   }
   EXPECT_GT(hits, 0);
   EXPECT_LT(hits, kRuns);
@@ -176,10 +179,6 @@ TEST(CollideReference, EveryKernelBuildAgreesOnSubnormalOffsets) {
 // yet every build gives the same hits, box tests and leaf pairs, and no pair
 // the scalar reference finds touching is missed.
 TEST(CollideReference, EveryKernelBuildAgreesOnSubnormalTrees) {
-  std::vector<BoxKernel> kernels;
-  for (const BoxKernel k : {BoxKernel::portable, BoxKernel::avx2, BoxKernel::avx512})
-    if (use_box_kernel(k)) kernels.push_back(k);
-  ASSERT_TRUE(use_box_kernel(BoxKernel::best));
   std::mt19937 rng(34);
   int hits = 0;
   for (int run = 0; run < kRuns; ++run) {
@@ -192,21 +191,9 @@ TEST(CollideReference, EveryKernelBuildAgreesOnSubnormalTrees) {
     pb.scale = 0.5 + uniform01(rng);
     pb.position = unit * (Eigen::Vector3d(uniform01(rng), uniform01(rng), uniform01(rng)) - Eigen::Vector3d::Constant(0.5));
     const PlacedTree a{&ta, pa, depth_a}, b{&tb, pb, depth_b};
-    std::vector<PairTest> results;
-    for (const BoxKernel k : kernels) {
-      ASSERT_TRUE(use_box_kernel(k));
-      results.push_back(collide(a, b));
-    }
-    ASSERT_TRUE(use_box_kernel(BoxKernel::best));
-    for (size_t k = 1; k < results.size(); ++k) {
-      ASSERT_EQ(results[k].hit, results[0].hit) << "run " << run;
-      ASSERT_EQ(results[k].box_tests, results[0].box_tests) << "run " << run;
-      ASSERT_EQ(key(results[k].leaf), key(results[0].leaf)) << "run " << run;
-    }
-    if (collide_reference(a, b).hit) {
-      ASSERT_TRUE(results[0].hit) << "run " << run;
-    }
-    hits += results[0].hit;
+    bool hit = false;
+    ASSERT_NO_FATAL_FAILURE(expect_builds_agree(a, b, run, hit));
+    hits += hit;
   }
   // The padding's floor (2^-900) dwarfs these trees: every pair touches.
   EXPECT_EQ(hits, kRuns);
