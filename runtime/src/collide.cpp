@@ -631,13 +631,6 @@ class PairFrame {
                  cross_b[2]);
     store_groups(t_.padding_b, ((ac[0] + ac[1]) + ac[2]) * pad, pads, cross_pad_b[0], cross_pad_b[1],
                  cross_pad_b[2]);
-    // Depth-1 steps u_k (nearest_weights): A's child at +q moves t by -q;
-    // B's axis k is s R e_k.
-    for (int k = 0; k < 3; ++k)
-      for (int m = 0; m < 3; ++m) {
-        steps_a_[k][m] = m == k ? -0.25 * a_size_[k] : 0.0;
-        steps_b_[k][m] = 0.25 * b_size_[k] * rel_.sr(m, k);
-      }
     // For the split schedule (fill_level): half diagonals in A's units.
     size_a_ = (0.5 * a_size_).squaredNorm();
     size_b_ = (0.5 * rel_.s * b_size_).squaredNorm();
@@ -780,6 +773,9 @@ class PairFrame {
       const double quarter[3] = {0.25 * a_size_[0], 0.25 * a_size_[1], 0.25 * a_size_[2]};
       // t = centre B - centre A: A's child moving by +q moves t by -q.
       fill_offsets<W>(t_.offset_a, w, quarter, -1.0);
+      // Its depth-1 steps u_k (nearest_weights).
+      for (int k = 0; k < 3; ++k)
+        for (int m = 0; m < 3; ++m) steps_a_[k][m] = m == k ? -quarter[k] : 0.0;
       filled_offsets_ |= 1u;
     }
     return t_.offset_a;
@@ -795,6 +791,8 @@ class PairFrame {
         for (int j = 0; j < 3; ++j) wb[j][c] = (w[0][c] * sr(0, j) + w[1][c] * sr(1, j)) + w[2][c] * sr(2, j);
       const double quarter[3] = {0.25 * b_size_[0], 0.25 * b_size_[1], 0.25 * b_size_[2]};
       fill_offsets<W>(t_.offset_b, wb, quarter, 1.0);
+      for (int k = 0; k < 3; ++k)
+        for (int m = 0; m < 3; ++m) steps_b_[k][m] = quarter[k] * sr(m, k);
       filled_offsets_ |= 2u;
     }
     return t_.offset_b;
@@ -824,11 +822,12 @@ class PairFrame {
   Relative rel_;
   Eigen::Vector3d a_min_, b_min_, a_size_, b_size_;  // root sizes
   double size_a_, size_b_;  // squared half diagonals in A's units
-  double steps_a_[3][3], steps_b_[3][3];  // [k]: u_k, nearest first
   const ObjectTree *tree_a_, *tree_b_;
   int depth_a_, depth_b_;
   // Filled lazily (the frame is used by one descent only).
   mutable LaneTables t_;
+  // The depth-1 steps u_k, [k][m], filled with their offsets.
+  mutable double steps_a_[3][3], steps_b_[3][3];
   mutable Level level_[kPathLevels];
   alignas(64) mutable Lanes level_offsets_[kPathLevels][8];
   mutable int known_levels_ = 0;  // levels 0..known_levels_ - 1 are worked out

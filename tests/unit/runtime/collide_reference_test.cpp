@@ -189,7 +189,8 @@ TEST(CollideReference, EveryKernelBuildAgreesOnSubnormalTrees) {
     pa.rotation = random_rotation(rng);
     pb.rotation = run % 2 == 0 ? pa.rotation : random_rotation(rng);
     pb.scale = 0.5 + uniform01(rng);
-    pb.position = unit * (Eigen::Vector3d(uniform01(rng), uniform01(rng), uniform01(rng)) - Eigen::Vector3d::Constant(0.5));
+    pb.position =
+        unit * (Eigen::Vector3d(uniform01(rng), uniform01(rng), uniform01(rng)) - Eigen::Vector3d::Constant(0.5));
     const PlacedTree a{&ta, pa, depth_a}, b{&tb, pb, depth_b};
     bool hit = false;
     ASSERT_NO_FATAL_FAILURE(expect_builds_agree(a, b, run, hit));

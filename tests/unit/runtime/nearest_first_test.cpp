@@ -75,7 +75,8 @@ TEST(NearestFirst, OrderFollowsTheChildrensDistances) {
     if (run % 7 == 0) q[run % 3] = 0;  // a flat box
     const bool rotated = run % 2 == 1;  // B's steps (rotated) or A's (its axes)
     Eigen::Vector3d u[3];
-    for (int k = 0; k < 3; ++k) u[k] = rotated ? Eigen::Vector3d(q[k] * r.col(k)) : Eigen::Vector3d(-q[k] * Eigen::Vector3d::Unit(k));
+    for (int k = 0; k < 3; ++k)
+      u[k] = rotated ? Eigen::Vector3d(q[k] * r.col(k)) : Eigen::Vector3d(-q[k] * Eigen::Vector3d::Unit(k));
     const double reach = q.maxCoeff() * std::pow(10.0, uniform(rng, -3, 3));
     const Eigen::Vector3d p(uniform(rng, -reach, reach), uniform(rng, -reach, reach), uniform(rng, -reach, reach));
     double w[3];
