@@ -636,12 +636,12 @@ Status CollisionWorld::set_poses(std::span<const ObjectHandle> handles, std::spa
   const size_t blocks = (n + kPoseGrain - 1) / kPoseGrain;
   if (block_moves_.size() < blocks) block_moves_.resize(blocks);
   std::fill_n(block_moves_.begin(), blocks, kBlockNotMoved);
-  std::atomic<size_t> next_block{0};
   std::atomic<bool> any_moved{false};
-  // Moves the next block no chunk has taken; false when none is left.
-  const auto move_next_block = [&] {
-    const size_t block = next_block.fetch_add(1, std::memory_order_relaxed);
-    if (block >= blocks) return false;
+  // Moves block `block` unless a thread has taken it; false if one had.
+  const auto move_block = [&](size_t block) {
+    uint32_t state = kBlockNotMoved;
+    if (!std::atomic_ref(block_moves_[block]).compare_exchange_strong(state, kBlockTaken, std::memory_order_relaxed))
+      return false;
     bool any = false;
     uint32_t* slots = move_slots_.data() + block * kPoseGrain;
     WorldTree::CellRange* cells = move_cells_.data() + block * kPoseGrain;
@@ -661,23 +661,31 @@ Status CollisionWorld::set_poses(std::span<const ObjectHandle> handles, std::spa
     return true;
   };
   // Each block's objects that change cells to their new cells, in block
-  // order, each block as soon as it is moved. While the next block is not
-  // moved yet, this moves the next one not taken, so it waits only while
-  // every block left is being moved by a running chunk, whatever order the
-  // executor runs the chunks in (inline: it moves and updates block after
-  // block, while they are in the cache).
+  // order, each block as soon as it is moved: it moves a block no thread
+  // has taken itself; while another thread moves it, it moves a later one
+  // not taken, so it waits only while every block left is being moved by a
+  // running chunk, whatever order the executor runs the chunks in (inline:
+  // it moves and updates block after block, while they are in the cache).
   const auto follow_blocks = [&] {
+    size_t help = 0;  // blocks before it are taken
     for (size_t block = 0; block < blocks; ++block) {
       uint32_t changed;
-      while ((changed = std::atomic_ref(block_moves_[block]).load(std::memory_order_acquire)) == kBlockNotMoved)
-        if (!move_next_block()) spin_pause();
+      while ((changed = std::atomic_ref(block_moves_[block]).load(std::memory_order_acquire)) >= kBlockTaken)
+        if (!move_block(block)) {
+          for (help = std::max(help, block + 1); help < blocks && !move_block(help);) ++help;
+          if (help == blocks) spin_pause();
+        }
       commit_moves(std::span(move_slots_).subspan(block * kPoseGrain, changed),
                    std::span(move_cells_).subspan(block * kPoseGrain, changed));
     }
   };
   // Chunk 0 follows the blocks (first, on the calling thread, for the
-  // built-in pool); every other chunk moves a block. One block is not worth
-  // a fork.
+  // built-in pool); chunk c moves block c - 1. The pool runs each thread's
+  // share of the chunks first: a worker moves the same blocks frame after
+  // frame, and finds their slots in its core's cache (taking whichever
+  // block came next made two threads' moves ~1.7x slower per block than
+  // one's on a host with a slow core-to-core round trip). One block is not
+  // worth a fork.
   if (blocks == 1)
     follow_blocks();
   else
@@ -686,7 +694,7 @@ Status CollisionWorld::set_poses(std::span<const ObjectHandle> handles, std::spa
                      if (c == 0)
                        follow_blocks();
                      else
-                       move_next_block();
+                       move_block(c - 1);
                  }));
   const bool moved = any_moved.load();
   if (moved && settings_.area_refresh == AreaRefresh::on_demand) any_stale_area_ = true;

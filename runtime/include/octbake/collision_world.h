@@ -485,10 +485,10 @@ class OCTBAKE_API CollisionWorld {
   // commit_poses scratch: per dirty_ entry, whether its cells change.
   enum : uint8_t { kUnmoved, kMoved };
   std::vector<uint8_t> move_flags_;
-  // set_poses: per block of items, kBlockNotMoved, then how many of its
-  // objects change cells; those objects and their cells, at the block's
-  // items' offset.
-  static constexpr uint32_t kBlockNotMoved = UINT32_MAX;
+  // set_poses: per block of items, kBlockNotMoved, kBlockTaken while a
+  // thread moves it, then how many of its objects change cells; those objects
+  // and their cells, at the block's items' offset.
+  static constexpr uint32_t kBlockNotMoved = UINT32_MAX, kBlockTaken = UINT32_MAX - 1;
   std::vector<uint32_t> block_moves_;
   std::vector<uint32_t> move_slots_;
   std::vector<WorldTree::CellRange> move_cells_;
