@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <new>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -500,6 +501,10 @@ constexpr size_t kSweepFrom = 32;
 // a part to another thread.
 constexpr size_t kWordsPerPart = 8;
 
+// Bytes of cells, ids and boxes below which the pair scan fetches nothing
+// ahead (see scan_cells).
+constexpr size_t kCachedWorldBytes = 128 * 1024;
+
 // The busy cells, each pair emitted only by its first common cell, then one
 // sort: cheaper than visiting every object's cells in id order. `keep`
 // filters pairs before they are stored and sorted.
@@ -532,17 +537,23 @@ void WorldTree::scan_cells(size_t begin, size_t end, Keep keep, Emit emit) const
       }
     }
   };
+  // A world whose cells, ids and boxes fit well inside a core's L2 cache
+  // stays there between frames: fetching ahead was only instructions.
+  const size_t footprint = cells_.size() * sizeof(Cell) + lo_.size() * (sizeof(uint64_t) + (kBoxes ? sizeof(Aabb) : 0));
+  const bool fetch = footprint > kCachedWorldBytes;
   std::array<uint32_t, 64 * kWordsPerPart> slots;
   for (size_t first = begin; first < end; first += kWordsPerPart) {
     int count = 0;
     for (size_t word = first; word < std::min(end, first + kWordsPerPart); ++word)
       for (uint64_t bits = busy_[word]; bits != 0; bits &= bits - 1)
         slots[count++] = uint32_t(64 * word + size_t(std::countr_zero(bits)));
-    for (int k = 0; k < std::min(count, kAhead); ++k) fetch_cell(slots[k]);
-    for (int k = 0; k < std::min(count, kAhead / 2); ++k) fetch_ids(slots[k]);
+    if (fetch) {
+      for (int k = 0; k < std::min(count, kAhead); ++k) fetch_cell(slots[k]);
+      for (int k = 0; k < std::min(count, kAhead / 2); ++k) fetch_ids(slots[k]);
+    }
     for (int k = 0; k < count; ++k) {
-      if (k + kAhead < count) fetch_cell(slots[k + kAhead]);
-      if (k + kAhead / 2 < count) fetch_ids(slots[k + kAhead / 2]);
+      if (fetch && k + kAhead < count) fetch_cell(slots[k + kAhead]);
+      if (fetch && k + kAhead / 2 < count) fetch_ids(slots[k + kAhead / 2]);
       const Cell& cell = cells_[slots[k]];
       const uint32_t* ids = cell.ids.data();
       const size_t n = cell.ids.size();
@@ -701,13 +712,18 @@ size_t WorldTree::scan_parts() const { return (busy_.size() + kWordsPerPart - 1)
 void WorldTree::scan_part(size_t part, std::span<const Aabb> boxes, PairSink& sink) const {
   assert(boxes.size() >= entries_.size());
   const size_t begin = std::min(busy_.size(), part * kWordsPerPart);
-  std::array<std::pair<uint32_t, uint32_t>, 32> block;  // handed over when full (small: pairs zero-initialise)
+  // Handed over when full. Left uninitialised: std::pair's constructor
+  // zeroed all of it (a rep stos) in every part, a small scene's few pairs or not.
+  using Pair = std::pair<uint32_t, uint32_t>;
+  constexpr size_t kBlock = 32;
+  alignas(Pair) unsigned char storage[kBlock * sizeof(Pair)];
+  Pair* const block = std::launder(reinterpret_cast<Pair*>(storage));
   size_t n = 0;
   scan_cells(begin, std::min(busy_.size(), begin + kWordsPerPart), BoxesOverlap{boxes}, [&](uint32_t a, uint32_t b) {
-    block[n++] = {a, b};
-    if (n == block.size()) sink.take(block), n = 0;
+    new (block + n++) Pair(a, b);
+    if (n == kBlock) sink.take(std::span(block, n)), n = 0;
   });
-  if (n > 0) sink.take(std::span(block).first(n));
+  if (n > 0) sink.take(std::span(block, n));
 }
 
 void WorldTree::finish_pairs(std::span<const Aabb> boxes, std::vector<std::pair<uint32_t, uint32_t>>& out) const {

@@ -282,6 +282,39 @@ TEST(WorldTreeSizes, CrowdedCellOfTouchingBoxesMatchesBruteForce) {
   EXPECT_GT(want.size(), 72u * 6);  // each lattice box touches its up to 26 neighbours
 }
 
+// The pair scan fetches cells, ids and boxes ahead only in a world too big
+// to stay in a core's caches (past 128 KB of them): 40 objects and 4000
+// (~220 KB of ids and boxes alone), both with crowded cells and a few objects
+// over many cells, give brute force's pairs through moves either way.
+TEST(WorldTreeSizes, ScanOfSmallAndLargeWorldsMatchesBruteForce) {
+  for (const uint32_t n : {40u, 4000u}) {
+    const Aabb world{{-50, -50, -50}, {50, 50, 50}};
+    WorldTree tree(world, /*depth=*/5);  // cells of 3.125
+    std::mt19937 rng(77 + n);
+    const double reach = n == 40 ? 8 : 50;  // the small world crowded too
+    std::vector<Aabb> boxes(n);
+    for (uint32_t i = 0; i < n; ++i) {
+      const double half = i % 97 == 0 ? 12 : uniform(rng, 0.2, 3);
+      const Eigen::Vector3d c(uniform(rng, -reach, reach), uniform(rng, -reach, reach), uniform(rng, -reach, reach));
+      boxes[i] = {c.array() - half, c.array() + half};
+      tree.update(i, boxes[i]);
+    }
+    for (int round = 0; round < 3; ++round) {
+      Pairs want;
+      for (uint32_t a = 0; a < n; ++a)
+        for (uint32_t b = a + 1; b < n; ++b)
+          if (overlaps(boxes[a], boxes[b])) want.emplace_back(a, b);
+      expect_overlapping_pairs(tree, boxes, want);
+      EXPECT_GT(want.size(), size_t(n)) << n << " objects: the scene must have overlaps to mean anything";
+      for (uint32_t i = uint32_t(round); i < n; i += 2) {  // half of them move, many to other cells
+        const Eigen::Vector3d d(uniform(rng, -2, 2), uniform(rng, -2, 2), uniform(rng, -2, 2));
+        boxes[i] = {boxes[i].min + d, boxes[i].max + d};
+        tree.update(i, boxes[i]);
+      }
+    }
+  }
+}
+
 // Hundreds of objects too big for the cells (overflow), a few of them too
 // big even for the coarse cells, among small ones, some poking out of the
 // world: the box-filtered pairs (which then go through coarse cells) are
