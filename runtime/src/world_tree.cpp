@@ -128,8 +128,8 @@ size_t WorldTree::table_find(uint32_t key) const {
     if (table_[i] == 0 || (table_[i] >> 32) == tag) return i;
 }
 
-void WorldTree::table_grow() {
-  std::vector<uint64_t> old(std::max<size_t>(64, table_.size() * 2), 0);
+void WorldTree::table_grow(size_t at_least) {
+  std::vector<uint64_t> old(std::max({size_t(64), table_.size() * 2, std::bit_ceil(at_least)}), 0);
   old.swap(table_);
   for (uint64_t e : old)
     if (e != 0) table_[table_find(uint32_t((e >> 32) - 1))] = e;
@@ -383,6 +383,7 @@ void WorldTree::update_cells(std::span<const uint32_t> ids, std::span<const Cell
   assert(ids.size() == ranges.size());
   assert(parts >= 1 && std::has_single_bit(parts));
   const size_t n = ids.size();
+  const size_t cells_before = table_used_;
   // Sized for every object at once: grows with the world, not with a frame
   // that moves more objects than the frames before.
   if (moves_.size() < n) moves_.resize(std::max(n, entries_.size()));
@@ -431,6 +432,14 @@ void WorldTree::update_cells(std::span<const uint32_t> ids, std::span<const Cell
       if (m.emptied[i]) emptied_.push_back(m.leave[i]);
   }
   free_emptied();
+  // 6. After a batch that made many cells (a load, a spawn), room for as many
+  // again: growing the cells or the table copies or rehashes them all, and
+  // left to the next cell made, that fell on the first moving frame after a
+  // load (20k objects: that frame 16 ms against 3 ms, `octscene run`).
+  if (3 * (table_used_ - std::min(table_used_, cells_before)) >= cells_before && table_used_ > 0) {
+    if (cells_.capacity() < 2 * table_used_) cells_.reserve(2 * table_used_);
+    if (table_.size() < 4 * table_used_ + 2) table_grow(4 * table_used_ + 2);  // cell_slot keeps it under half full
+  }
 }
 
 namespace {

@@ -144,6 +144,11 @@ class OCTBAKE_API WorldTree {
   // Cells in the table: after every update(), update_cells() and remove(),
   // exactly the cells holding an object (those left empty are freed).
   size_t cells_in_use() const { return table_used_; }
+  // Cells the tree can hold before its cell array or table must grow (copy
+  // or rehash every cell). A batch of update_cells that made at least a
+  // third as many cells as it found (a load, a spawn) leaves room for twice
+  // the cells in use, so the frames after it, which make a few, grow neither.
+  size_t cell_room() const { return std::min(cells_.capacity(), table_.size() / 2); }
   bool contains(uint32_t id) const { return id < entries_.size() && entries_[id].present; }
   bool in_overflow(uint32_t id) const { return contains(id) && entries_[id].overflow; }
 
@@ -303,7 +308,7 @@ class OCTBAKE_API WorldTree {
   bool leave_cell(uint32_t slot, uint32_t id);  // true: the cell is left empty
   uint32_t cell_slot(const Coord& at);  // finds or creates
   size_t table_find(uint32_t key) const;
-  void table_grow();
+  void table_grow(size_t at_least = 0);  // to twice its size, and at least `at_least` entries
   // leave_cell, the cell listed in emptied_ if left empty.
   void leave_and_list(uint32_t slot, uint32_t id);
   // Frees emptied_'s cells that are still empty. update() and remove() call
