@@ -28,6 +28,7 @@
 // overflow set is large (kCoarseFrom), those scans pair it through coarse
 // cells instead of with every object.
 #pragma once
+#include <algorithm>
 #include <array>
 #include <cassert>
 #include <cstdint>
