@@ -124,6 +124,25 @@ struct Relative {
   }
 };
 
+// Whether one of B's axes is one of A's exactly (R has an entry +-1 whose
+// row and column are otherwise 0): two objects turned about the same axis,
+// like upright objects that only yaw, or unrotated ones. Every edge axis
+// A_i x B_j is then zero or parallel to a face axis (A_i = +-B_j: A_i x B_k
+// is +-B's third axis, A_k x B_j A's, and A_k x B_l lies along A_i), so in
+// exact arithmetic the six face axes separate every box pair that all
+// fifteen do, and the kernel tests lanes 0..7 only (kFaceLanes): half the
+// work per child. The lanes are padded differently (by ~1e-9 of the boxes'
+// size), so near the boundary the face axes alone may keep a pair that an
+// edge axis separated: a contact more, never a miss.
+bool shares_axis(const Eigen::Matrix3d& r) {
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (std::abs(r(i, j)) == 1 && r(i, (j + 1) % 3) == 0 && r(i, (j + 2) % 3) == 0 && r((i + 1) % 3, j) == 0 &&
+          r((i + 2) % 3, j) == 0)
+        return true;
+  return false;
+}
+
 // The occupied octants of every child mask, in order, and how many (also
 // the portable build's popcount: in an x86-64 build without POPCNT,
 // std::popcount is a library call).
@@ -163,8 +182,9 @@ bool occupied(const ObjectTree& tree, int depth, const BoxCoord& c) {
 // 0..2, B's faces 3..5, edge pairs A_i x B_j at 6 + 3i + j, lane 15 idle
 // (always 0 against radius 0). The pair is separated iff some |p_k| > r_k.
 //
-// children_overlap<kScale>(parent, radius, offset, scale, octant, n): the
-// children `octant[0..n)` of the split box against the other box. The
+// children_overlap<kScale, kTested>(parent, radius, offset, scale, octant,
+// n): the children `octant[0..n)` of the split box against the other box,
+// on lanes 0..kTested-1 (all 16, or the face lanes: see shares_axis). The
 // projections of the child in octant j are parent + offset[j] * scale (scale
 // a power of two, so the product is exact) if kScale, else parent +
 // offset[j] (the offsets already scaled to the children's depth: the same
@@ -186,6 +206,7 @@ bool occupied(const ObjectTree& tree, int depth, const BoxCoord& c) {
 // which is compiled once per build and chosen once per pair (run_pair): no
 // call through a pointer in the descent's inner loop.
 constexpr int kLanes = 16;
+constexpr int kFaceLanes = 8;  // lanes 0..7: the six face axes (and two edge axes), see shares_axis
 using Lanes = double[kLanes];
 
 // Written per chunk of W lanes with GCC/Clang vector types, loaded and stored
@@ -258,12 +279,12 @@ struct Portable {
   static constexpr int kStoreLanes = 2;
   using V = Vec<kStoreLanes>;
   using M = typename Chunk<kStoreLanes>::mask;
-  static constexpr int kChunks = kLanes / kStoreLanes;
 
-  template <bool kScale>
+  template <bool kScale, int kTested>
   [[gnu::always_inline]] static uint32_t children_overlap(const double* parent, const double* radius,
                                                           const Lanes* offset, double scale, const uint8_t* octant,
                                                           int n) {
+    constexpr int kChunks = kTested / kStoreLanes;
     V p[kChunks], r[kChunks];
     for (int k = 0; k < kChunks; ++k) {
       load<kStoreLanes>(p[k], parent + kStoreLanes * k);
@@ -299,10 +320,11 @@ struct Portable {
     return !any_lane<kStoreLanes>(separated);
   }
 
-  // out = a + b * scale, 16 lanes: a child's projections from its parent's
-  // and its offset, as children_overlap computes them.
+  // out = a + b * scale, the first kTested lanes: a child's projections from
+  // its parent's and its offset, as children_overlap computes them.
+  template <int kTested>
   [[gnu::always_inline]] static void add_scaled(double* out, const double* a, const double* b, double scale) {
-    for (int k = 0; k < kLanes; k += kStoreLanes) {
+    for (int k = 0; k < kTested; k += kStoreLanes) {
       V x, y;
       load<kStoreLanes>(x, a + k);
       load<kStoreLanes>(y, b + k);
@@ -326,19 +348,21 @@ struct Avx2 {
 
   // As Portable's, the products fused with the sums: the same results (see
   // kMinPad).
+  template <int kTested>
   [[gnu::target("avx2,fma")]] static void add_scaled(double* out, const double* a, const double* b, double scale) {
     const __m256d s = _mm256_set1_pd(scale);
-    for (int k = 0; k < kLanes; k += 4)
+    for (int k = 0; k < kTested; k += 4)
       _mm256_storeu_pd(out + k, _mm256_fmadd_pd(_mm256_loadu_pd(b + k), s, _mm256_loadu_pd(a + k)));
   }
-  template <bool kScale>
+  template <bool kScale, int kTested>
   [[gnu::target("avx2,fma")]] static uint32_t children_overlap(const double* parent, const double* radius,
                                                          const Lanes* offset, double scale, const uint8_t* octant,
                                                          int n) {
+    constexpr int kChunks = kTested / 4;
     const __m256d s = _mm256_set1_pd(scale);
     const __m256d not_sign = _mm256_castsi256_pd(_mm256_set1_epi64x(INT64_MAX));  // |x| is one AND
-    __m256d p[4], r[4];
-    for (int k = 0; k < 4; ++k) {
+    __m256d p[kChunks], r[kChunks];
+    for (int k = 0; k < kChunks; ++k) {
       p[k] = _mm256_loadu_pd(parent + 4 * k);
       r[k] = _mm256_loadu_pd(radius + 4 * k);
     }
@@ -346,7 +370,7 @@ struct Avx2 {
     for (int c = 0; c < n; ++c) {
       const double* o = offset[octant[c]];
       __m256d separated = _mm256_setzero_pd();
-      for (int k = 0; k < 4; ++k) {
+      for (int k = 0; k < kChunks; ++k) {
         const __m256d ok = _mm256_loadu_pd(o + 4 * k);
         const __m256d q = kScale ? _mm256_fmadd_pd(ok, s, p[k]) : _mm256_add_pd(p[k], ok);
         separated = _mm256_or_pd(separated, _mm256_cmp_pd(_mm256_and_pd(q, not_sign), r[k], _CMP_GT_OQ));
@@ -378,29 +402,40 @@ struct Avx512 {
 
   // As Portable's, the products fused with the sums: the same results (see
   // kMinPad).
+  template <int kTested>
   [[gnu::target("avx512f")]] static void add_scaled(double* out, const double* a, const double* b, double scale) {
     const __m512d s = _mm512_set1_pd(scale);
-    for (int k = 0; k < kLanes; k += 8)
+    for (int k = 0; k < kTested; k += 8)
       _mm512_storeu_pd(out + k, _mm512_fmadd_pd(_mm512_loadu_pd(b + k), s, _mm512_loadu_pd(a + k)));
   }
-  template <bool kScale>
+  template <bool kScale, int kTested>
   [[gnu::target("avx512f")]] static uint32_t children_overlap(const double* parent, const double* radius,
                                                             const Lanes* offset, double scale,
                                                             const uint8_t* octant, int n) {
     const __m512d s = _mm512_set1_pd(scale);
-    const __m512d p0 = _mm512_loadu_pd(parent), p1 = _mm512_loadu_pd(parent + 8);
-    const __m512d r0 = _mm512_loadu_pd(radius), r1 = _mm512_loadu_pd(radius + 8);
-    uint32_t overlapping = 0;
-    for (int c = 0; c < n; ++c) {
-      const double* o = offset[octant[c]];
-      const __m512d o0 = _mm512_loadu_pd(o), o1 = _mm512_loadu_pd(o + 8);
-      const __m512d q0 = kScale ? _mm512_fmadd_pd(o0, s, p0) : _mm512_add_pd(p0, o0);
-      const __m512d q1 = kScale ? _mm512_fmadd_pd(o1, s, p1) : _mm512_add_pd(p1, o1);
-      const __mmask8 separated = __mmask8(_mm512_cmp_pd_mask(_mm512_abs_pd(q0), r0, _CMP_GT_OQ) |
-                                          _mm512_cmp_pd_mask(_mm512_abs_pd(q1), r1, _CMP_GT_OQ));
-      overlapping |= uint32_t(separated == 0) << octant[c];
+    const __m512d p0 = _mm512_loadu_pd(parent), r0 = _mm512_loadu_pd(radius);
+    if constexpr (kTested == 8) {
+      uint32_t overlapping = 0;
+      for (int c = 0; c < n; ++c) {
+        const __m512d o0 = _mm512_loadu_pd(offset[octant[c]]);
+        const __m512d q0 = kScale ? _mm512_fmadd_pd(o0, s, p0) : _mm512_add_pd(p0, o0);
+        overlapping |= uint32_t(_mm512_cmp_pd_mask(_mm512_abs_pd(q0), r0, _CMP_GT_OQ) == 0) << octant[c];
+      }
+      return overlapping;
+    } else {
+      const __m512d p1 = _mm512_loadu_pd(parent + 8), r1 = _mm512_loadu_pd(radius + 8);
+      uint32_t overlapping = 0;
+      for (int c = 0; c < n; ++c) {
+        const double* o = offset[octant[c]];
+        const __m512d o0 = _mm512_loadu_pd(o), o1 = _mm512_loadu_pd(o + 8);
+        const __m512d q0 = kScale ? _mm512_fmadd_pd(o0, s, p0) : _mm512_add_pd(p0, o0);
+        const __m512d q1 = kScale ? _mm512_fmadd_pd(o1, s, p1) : _mm512_add_pd(p1, o1);
+        const __mmask8 separated = __mmask8(_mm512_cmp_pd_mask(_mm512_abs_pd(q0), r0, _CMP_GT_OQ) |
+                                            _mm512_cmp_pd_mask(_mm512_abs_pd(q1), r1, _CMP_GT_OQ));
+        overlapping |= uint32_t(separated == 0) << octant[c];
+      }
+      return overlapping;
     }
-    return overlapping;
   }
 
   template <int kHalf>
@@ -508,9 +543,9 @@ using Group = std::conditional_t<W == 2, HalfPair, v4d>;
 
 // out = a + b, 16 lanes: a child's projections in collide_all, its parent's
 // plus its offset already scaled to its depth, as the kernel computes them.
-template <int W>
+template <int W, int kTested>
 [[gnu::always_inline]] inline void add_lanes(double* out, const double* a, const double* b) {
-  for (int k = 0; k < kLanes; k += W) {
+  for (int k = 0; k < kTested; k += W) {
     Vec<W> x, y;
     load<W>(x, a + k);
     load<W>(y, b + k);
@@ -519,6 +554,7 @@ template <int W>
 }
 
 std::atomic<BoxKernel> chosen_kernel{BoxKernel::best};
+std::atomic<bool> shared_axis_shortcut{true};
 
 bool cpu_has(BoxKernel k) {
   switch (k) {
@@ -638,9 +674,11 @@ class PairFrame {
     tree_b_ = b.tree;
     depth_a_ = a.depth;
     depth_b_ = b.depth;
+    shares_axis_ = octbake::shares_axis(r);
   }
 
   int levels() const { return depth_a_ + depth_b_; }
+  bool shares_axis() const { return shares_axis_; }
 
   // Level l, worked out on first use: the descent expands a pair at level l
   // only after one at l - 1 (one descent uses the frame, so always the same
@@ -693,10 +731,10 @@ class PairFrame {
 
   // Test the children of the split box of level l against the other box: see
   // children_overlap.
-  template <bool kScaled>
+  template <bool kScaled, int kTested>
   [[gnu::always_inline]] static uint32_t children_overlap(const Level& t, const double* parent,
                                                           const uint8_t* octant, int n) {
-    return K::template children_overlap<!kScaled>(parent, t.radius, t.offset, t.scale, octant, n);
+    return K::template children_overlap<!kScaled, kTested>(parent, t.radius, t.offset, t.scale, octant, n);
   }
 
   // w_k = p . u_k (see NearestTables) for the tree split at lv, summed in
@@ -824,6 +862,7 @@ class PairFrame {
   double size_a_, size_b_;  // squared half diagonals in A's units
   const ObjectTree *tree_a_, *tree_b_;
   int depth_a_, depth_b_;
+  bool shares_axis_;
   // Filled lazily (the frame is used by one descent only).
   mutable LaneTables t_;
   // The depth-1 steps u_k, [k][m], filled with their offsets.
@@ -868,7 +907,7 @@ bool some_leaf(const ObjectTree& tree, int depth, int d, uint32_t index, const C
 // open pair (projections, indices, coordinates) and its overlapping children
 // still to visit, in visiting order. A child's projections are recomputed
 // from its parent's when it is visited (the same sums the kernel did).
-template <class K, class OnLeaf>
+template <class K, int kTested, class OnLeaf>
 [[gnu::always_inline]] inline void descend(const PairFrame<K>& frame, const PlacedTree& a, const PlacedTree& b,
                                            PairTest& result, OnLeaf on_leaf) {
   struct Open {
@@ -917,7 +956,7 @@ template <class K, class OnLeaf>
     }
     const uint8_t mask = lv.masks[index];
     const int count = kOctants.count[mask];
-    const uint32_t hits = PairFrame<K>::template children_overlap<false>(lv, o.p, kOctants.octant[mask], count);
+    const uint32_t hits = PairFrame<K>::template children_overlap<false, kTested>(lv, o.p, kOctants.octant[mask], count);
     box_tests += uint64_t(count);
     o.left = 0;
     if (hits != 0) {
@@ -953,7 +992,7 @@ template <class K, class OnLeaf>
     const uint8_t j = uint8_t((parent.order >> (3 * std::countr_zero(parent.left))) & 7u);
     parent.left &= parent.left - 1;
     const int split = plv.split_a ? 0 : 1;
-    K::add_scaled(child.p, parent.p, plv.offset[j], plv.scale);
+    K::template add_scaled<kTested>(child.p, parent.p, plv.offset[j], plv.scale);
     child.index[0] = parent.index[0], child.index[1] = parent.index[1];
     child.coord[0] = parent.coord[0], child.coord[1] = parent.coord[1];
     child.index[split] = parent.first + K::bits_below(parent.mask, j);
@@ -983,7 +1022,7 @@ struct SweepLevel {
   uint32_t index[kLevelCap][2];  // level indices, A's, B's
 };
 
-template <class K, class OnLeaf>
+template <class K, int kTested, class OnLeaf>
 [[gnu::always_inline]] inline void sweep_all(const PairFrame<K>& frame, PairTest& result, OnLeaf on_leaf) {
   Lanes root;
   frame.project({0, 0, 0}, 0, {0, 0, 0}, 0, root);
@@ -1057,7 +1096,8 @@ template <class K, class OnLeaf>
     for (int w = 0; w < words; ++w)
       for (uint64_t bits = near[w]; bits != 0; bits &= bits - 1) {
         const int c = 64 * w + std::countr_zero(bits);
-        if (!K::template half_overlaps<1>(batch[parent[c]], lv.offset[octant[c]], lv.radius)) continue;
+        if (kTested == kLanes && !K::template half_overlaps<1>(batch[parent[c]], lv.offset[octant[c]], lv.radius))
+          continue;
         const int i = begin + parent[c];
         const uint8_t j = octant[c];
         const Packed grown = child_of(in.coord[i][side], j);
@@ -1066,7 +1106,7 @@ template <class K, class OnLeaf>
           ++m;
           continue;
         }
-        add_lanes<K::kStoreLanes>(out.p[m], in.p[i], lv.offset[j]);
+        add_lanes<K::kStoreLanes, kTested>(out.p[m], in.p[i], lv.offset[j]);
         out.coord[m][0] = in.coord[i][0], out.coord[m][1] = in.coord[i][1];
         out.index[m][0] = in.index[i][0], out.index[m][1] = in.index[i][1];
         out.coord[m][side] = grown;
@@ -1103,13 +1143,12 @@ struct Job {
   std::vector<LeafPair>* all;
 };
 
-template <class K, bool kAll>
-[[gnu::always_inline]] inline PairTest run_pair(const Job& job) {
+template <class K, bool kAll, int kTested>
+[[gnu::always_inline]] inline PairTest test_pair(const Job& job, const PairFrame<K>& frame) {
   const Canonical& pair = job.pair;
-  const PairFrame<K> frame(pair.first, pair.second);
   PairTest result;
   if constexpr (kAll) {
-    sweep_all(frame, result,
+    sweep_all<K, kTested>(frame, result,
               [&](const Coord& ca, const Coord& cb) { job.all->push_back(pair.to_caller(ca, cb)); });
     return result;
   }
@@ -1125,9 +1164,17 @@ template <class K, bool kAll>
       return result;
     }
   }
-  descend(frame, pair.first, pair.second, result,
-          [&](const Coord& ca, const Coord& cb) { result.leaf = pair.to_caller(ca, cb); });
+  descend<K, kTested>(frame, pair.first, pair.second, result,
+                      [&](const Coord& ca, const Coord& cb) { result.leaf = pair.to_caller(ca, cb); });
   return result;
+}
+
+template <class K, bool kAll>
+[[gnu::always_inline]] inline PairTest run_pair(const Job& job) {
+  const PairFrame<K> frame(job.pair.first, job.pair.second);
+  return frame.shares_axis() && shared_axis_shortcut.load(std::memory_order_relaxed)
+             ? test_pair<K, kAll, kFaceLanes>(job, frame)
+             : test_pair<K, kAll, kLanes>(job, frame);
 }
 
 // One function per kernel build and per kind of test, so that neither
@@ -1182,6 +1229,8 @@ PairTest run(const PlacedTree& a, const PlacedTree& b, const LeafPair* hint, std
 }
 
 }  // namespace
+
+void use_shared_axis_shortcut(bool on) { shared_axis_shortcut.store(on, std::memory_order_relaxed); }
 
 bool use_box_kernel(BoxKernel kernel) {
   if (!cpu_has(kernel)) return false;

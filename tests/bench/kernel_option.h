@@ -2,6 +2,10 @@
 // box-test kernel (default: the widest the CPU has). The builds differ in
 // speed only (the same hits, counts and leaf pairs), and a CPU with AVX-512
 // can thus show what an AVX2-only or an ARM user gets.
+//
+// --shared-axis=off: test pairs that share an axis on all fifteen axes, as
+// before the shortcut (use_shared_axis_shortcut): its before and after from
+// one binary.
 #pragma once
 
 #include <benchmark/benchmark.h>
@@ -13,13 +17,23 @@
 
 namespace octbake {
 
-// Takes every --kernel=NAME out of argv (argc updated) and selects that
-// kernel. False, with one error line naming `tool`, if NAME is unknown or this
-// CPU cannot run it.
+// Takes every --kernel=NAME and --shared-axis=on|off out of argv (argc
+// updated) and selects that kernel. False, with one error line naming
+// `tool`, if NAME is unknown or this CPU cannot run it, or the shared-axis
+// value is neither on nor off.
 inline bool take_kernel_option(int& argc, char** argv, const char* tool) {
   int kept = 0;
   for (int i = 0; i < argc; ++i) {
     const std::string a = argv[i];
+    if (i > 0 && a.rfind("--shared-axis=", 0) == 0) {
+      const std::string v = a.substr(14);
+      if (v != "on" && v != "off") {
+        std::fprintf(stderr, "%s: --shared-axis=%s: expected on or off\n", tool, v.c_str());
+        return false;
+      }
+      use_shared_axis_shortcut(v == "on");
+      continue;
+    }
     if (i == 0 || a.rfind("--kernel=", 0) != 0) {
       argv[kept++] = argv[i];
       continue;

@@ -163,4 +163,11 @@ OCTBAKE_API PairTest collide_all_reference(const PlacedTree& a, const PlacedTree
 enum class BoxKernel { best, portable, avx2, avx512 };
 OCTBAKE_API bool use_box_kernel(BoxKernel kernel);
 
+// Tests and benchmarks only: whether a pair whose boxes share an axis exactly
+// (both unrotated, or turned about the same axis: upright objects that only
+// yaw) is tested on the six face axes alone (on, the default), which then
+// separate every box pair the nine edge axes would, or on all fifteen.
+// Process-wide. Off exists to compare the two.
+OCTBAKE_API void use_shared_axis_shortcut(bool on);
+
 }  // namespace octbake

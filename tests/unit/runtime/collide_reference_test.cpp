@@ -6,7 +6,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <numbers>
 #include <random>
+#include <string>
 #include <tuple>
 
 #include "octbake/collide.h"
@@ -198,6 +200,55 @@ TEST(CollideReference, EveryKernelBuildAgreesOnSubnormalTrees) {
   }
   // The padding's floor (2^-900) dwarfs these trees: every pair touches.
   EXPECT_EQ(hits, kRuns);
+}
+
+// Pairs that share an axis exactly (both turned about the same world axis,
+// unturned, or a quarter turn apart, as upright objects that only yaw):
+// collide() then tests the face axes alone (use_shared_axis_shortcut). At
+// every depth pair, on the same random trees and placements as above, it
+// gives what all fifteen axes give (hit, box tests, leaf pair, collide_all's
+// leaf pairs) and the scalar reference's hits, in every kernel build.
+TEST(CollideReference, SharedAxisPairsGiveWhatAllFifteenAxesGive) {
+  std::mt19937 rng(35);
+  int hits = 0, cases = 0;
+  const auto turn = [&](int axis) {
+    const int kind = int(rng() % 4);  // 0: none, 1: a quarter turn, else any angle
+    const double angle = kind == 0 ? 0 : kind == 1 ? std::numbers::pi / 2 * double(1 + rng() % 3)
+                                                   : 2 * std::numbers::pi * uniform01(rng);
+    return Eigen::Quaterniond(Eigen::AngleAxisd(angle, Eigen::Vector3d::Unit(axis)));
+  };
+  for (int run = 0; run < kRuns; ++run) {
+    const int depth_a = 1 + int(rng() % 4), depth_b = 1 + int(rng() % 4);
+    const ObjectTree ta = random_tree(rng, depth_a), tb = random_tree(rng, depth_b);
+    auto [pa, pb] = random_poses(rng);
+    const int axis = int(rng() % 3);
+    pa.rotation = turn(axis);
+    pb.rotation = turn(axis);
+    for (int da = 0; da <= depth_a; ++da)
+      for (int db = 0; db <= depth_b; ++db) {
+        const PlacedTree a{&ta, pa, da}, b{&tb, pb, db};
+        const PairTest faces = collide(a, b), ref = collide_reference(a, b);
+        std::vector<LeafPair> all_faces, all_fifteen;
+        collide_all(a, b, all_faces);
+        use_shared_axis_shortcut(false);
+        const PairTest fifteen = collide(a, b);
+        collide_all(a, b, all_fifteen);
+        use_shared_axis_shortcut(true);
+        const std::string at = "run " + std::to_string(run) + " depths " + std::to_string(da) + "-" + std::to_string(db);
+        ASSERT_EQ(faces.hit, ref.hit) << at;
+        ASSERT_EQ(faces.hit, fifteen.hit) << at;
+        ASSERT_EQ(faces.box_tests, fifteen.box_tests) << at;
+        ASSERT_EQ(key(faces.leaf), key(fifteen.leaf)) << at;
+        ASSERT_EQ(all_faces.size(), all_fifteen.size()) << at;
+        for (size_t i = 0; i < all_faces.size(); ++i) ASSERT_EQ(key(all_faces[i]), key(all_fifteen[i])) << at;
+        hits += faces.hit;
+        ++cases;
+      }
+    bool hit = false;
+    ASSERT_NO_FATAL_FAILURE(expect_builds_agree({&ta, pa, depth_a}, {&tb, pb, depth_b}, run, hit));
+  }
+  EXPECT_GT(hits, cases * 3 / 10) << "of " << cases;
+  EXPECT_LT(hits, cases * 7 / 10) << "of " << cases;
 }
 
 // A small object against a large one: the larger tree splits first, so the
