@@ -541,8 +541,9 @@ using Group = std::conditional_t<W == 2, HalfPair, v4d>;
   store<2>(out + 14, __builtin_shufflevector(g4.hi, Vec<2>{}, 0, 2));
 }
 
-// out = a + b, 16 lanes: a child's projections in collide_all, its parent's
-// plus its offset already scaled to its depth, as the kernel computes them.
+// out = a + b, the first kTested lanes: a child's projections in collide_all,
+// its parent's plus its offset already scaled to its depth, as the kernel
+// computes them.
 template <int W, int kTested>
 [[gnu::always_inline]] inline void add_lanes(double* out, const double* a, const double* b) {
   for (int k = 0; k < kTested; k += W) {
@@ -956,7 +957,8 @@ template <class K, int kTested, class OnLeaf>
     }
     const uint8_t mask = lv.masks[index];
     const int count = kOctants.count[mask];
-    const uint32_t hits = PairFrame<K>::template children_overlap<false, kTested>(lv, o.p, kOctants.octant[mask], count);
+    const uint32_t hits =
+        PairFrame<K>::template children_overlap<false, kTested>(lv, o.p, kOctants.octant[mask], count);
     box_tests += uint64_t(count);
     o.left = 0;
     if (hits != 0) {
@@ -1149,7 +1151,7 @@ template <class K, bool kAll, int kTested>
   PairTest result;
   if constexpr (kAll) {
     sweep_all<K, kTested>(frame, result,
-              [&](const Coord& ca, const Coord& cb) { job.all->push_back(pair.to_caller(ca, cb)); });
+                          [&](const Coord& ca, const Coord& cb) { job.all->push_back(pair.to_caller(ca, cb)); });
     return result;
   }
   if (job.hint) {

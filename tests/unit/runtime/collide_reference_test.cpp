@@ -234,7 +234,8 @@ TEST(CollideReference, SharedAxisPairsGiveWhatAllFifteenAxesGive) {
         const PairTest fifteen = collide(a, b);
         collide_all(a, b, all_fifteen);
         use_shared_axis_shortcut(true);
-        const std::string at = "run " + std::to_string(run) + " depths " + std::to_string(da) + "-" + std::to_string(db);
+        const std::string at =
+            "run " + std::to_string(run) + " depths " + std::to_string(da) + "-" + std::to_string(db);
         ASSERT_EQ(faces.hit, ref.hit) << at;
         ASSERT_EQ(faces.hit, fifteen.hit) << at;
         ASSERT_EQ(faces.box_tests, fifteen.box_tests) << at;
