@@ -277,6 +277,12 @@ struct Portable {
   // stored as wide as the kernel loads them: a load spanning two narrower
   // stores is not forwarded from them, it waits for them to retire.
   static constexpr int kStoreLanes = 2;
+  // The pair frame's set-up (projections, radii, offsets) fills only the
+  // lanes the descent tests: at two lanes a register, the face lanes of a
+  // pair that shares an axis (shares_axis) are half the work. The AVX builds
+  // fill all 16 lanes in one or two more vector operations; narrowing theirs
+  // too made rotated pairs 2-4% slower (session 34, code laid out anew).
+  static constexpr bool kNarrowSetUp = true;
   using V = Vec<kStoreLanes>;
   using M = typename Chunk<kStoreLanes>::mask;
 
@@ -339,6 +345,7 @@ struct Portable {
 // AVX2 with FMA (every AVX2 CPU has it; cpu_has checks both).
 struct Avx2 {
   static constexpr int kStoreLanes = 4;
+  static constexpr bool kNarrowSetUp = false;  // see Portable
 
   // As Portable's, with the POPCNT instruction (a table lookup was 1-2%
   // slower here).
@@ -395,6 +402,7 @@ struct Avx2 {
 
 struct Avx512 {
   static constexpr int kStoreLanes = 8;
+  static constexpr bool kNarrowSetUp = false;  // see Portable
 
   [[gnu::target("avx512f,popcnt")]] static uint32_t bits_below(uint32_t mask, int j) {
     return Avx2::bits_below(mask, j);
@@ -465,11 +473,12 @@ struct LaneTables {
 // tree; weights[m] give the effect on the projections (times sign). Octants
 // 7 - j are the negations of octants j (negation is exact).
 // weights[m][c]: lanes W c..W c + W - 1 of axis m's weights.
-template <int W>
+// Lanes 0..kFilled-1.
+template <int W, int kFilled>
 [[gnu::always_inline]] inline void fill_offsets(Lanes* offset, const Vec<W> (*weights)[kLanes / W], const double* q,
                                                 double sign) {
   const double f0 = sign * q[0], f1 = sign * q[1], f2 = sign * q[2];
-  for (int c = 0; c < kLanes / W; ++c) {
+  for (int c = 0; c < kFilled / W; ++c) {
     const Vec<W> e0 = weights[0][c] * f0, e1 = weights[1][c] * f1, e2 = weights[2][c] * f2;
     const Vec<W> s01 = e0 + e1, d01 = e0 - e1;  // +x+y, +x-y
     const Vec<W> o0 = -(s01 + e2), o1 = d01 - e2, o2 = -(d01 + e2), o3 = s01 - e2;
@@ -681,25 +690,31 @@ class PairFrame {
   int levels() const { return depth_a_ + depth_b_; }
   bool shares_axis() const { return shares_axis_; }
 
+  // The lanes the set-up fills for a descent that tests kTested lanes
+  // (lanes 0..kSetUp - 1; see Portable::kNarrowSetUp).
+  template <int kTested>
+  static constexpr int kSetUp = K::kNarrowSetUp ? kTested : kLanes;
+
   // Level l, worked out on first use: the descent expands a pair at level l
   // only after one at l - 1 (one descent uses the frame, so always the same
-  // kScaled).
-  template <bool kScaled>
+  // kScaled and kTested).
+  template <bool kScaled, int kTested>
   [[gnu::always_inline]] const Level& level(int l) const {
     assert(l <= known_levels_);
-    if (l == known_levels_) fill_level<kScaled>(l);
+    if (l == known_levels_) fill_level<kScaled, kTested>(l);
     return level_[l];
   }
   // A level already worked out.
   const Level& known_level(int l) const { return level_[l]; }
 
   // Projections of box pair (A's ca at da, B's cb at db).
+  template <int kTested>
   void project(const Coord& ca, int da, const Coord& cb, int db, Lanes& p) const {
     const Eigen::Vector3d qa = a_min_ + kHalfPow[da] * a_size_.cwiseProduct(cell_center(ca));
     const Eigen::Vector3d qb = b_min_ + kHalfPow[db] * b_size_.cwiseProduct(cell_center(cb));
     const Eigen::Vector3d t = (rel_.t + rel_.sr * qb) - qa;
     const Lanes* w = t_.w;
-    for (int k = 0; k < kLanes; k += W) {
+    for (int k = 0; k < kSetUp<kTested>; k += W) {
       V w0, w1, w2;
       load<W>(w0, w[0] + k);
       load<W>(w1, w[1] + k);
@@ -708,9 +723,10 @@ class PairFrame {
     }
   }
 
+  template <int kTested>
   bool overlap(const double* p, int da, int db) const {
     typename Chunk<W>::mask separated{};
-    for (int k = 0; k < kLanes; k += W) {
+    for (int k = 0; k < kSetUp<kTested>; k += W) {
       V pk, r;
       load<W>(pk, p + k);
       radius(r, k, kHalfPow[da], kHalfPow[db]);
@@ -749,7 +765,7 @@ class PairFrame {
   }
 
  private:
-  template <bool kScaled>
+  template <bool kScaled, int kTested>
   void fill_level(int l) const {
     Level& lv = level_[l];
     int da = 0, db = 0;
@@ -772,12 +788,12 @@ class PairFrame {
     lv.first_child = split_tree.first_children(lv.d);
     // Radii of the box pairs below: the split side one depth deeper.
     const double ha = kHalfPow[da + sa], hb = kHalfPow[db + !sa];
-    for (int k = 0; k < kLanes; k += W) {
+    for (int k = 0; k < kSetUp<kTested>; k += W) {
       V r;
       radius(r, k, ha, hb);
       store<W>(lv.radius + k, r);
     }
-    const Lanes* depth1 = sa ? offsets_a() : offsets_b();
+    const Lanes* depth1 = sa ? offsets_a<kTested>() : offsets_b<kTested>();
     lv.offset = depth1;
     lv.scale = kHalfPow[lv.d];
     if (kScaled) {
@@ -787,7 +803,7 @@ class PairFrame {
         const double h = kHalfPow[lv.d];
         Lanes* scaled = level_offsets_[l];
         for (int j = 0; j < 8; ++j)
-          for (int k = 0; k < kLanes; k += W) {
+          for (int k = 0; k < kSetUp<kTested>; k += W) {
             V x;
             load<W>(x, depth1[j] + k);
             store<W>(scaled[j] + k, x * h);
@@ -805,13 +821,14 @@ class PairFrame {
   }
 
   // The depth-1 child offsets of A's (B's) root, filled on first use.
+  template <int kTested>
   const Lanes* offsets_a() const {
     if (!(filled_offsets_ & 1u)) {
       V w[3][kLanes / W];
       load_weights(w);
       const double quarter[3] = {0.25 * a_size_[0], 0.25 * a_size_[1], 0.25 * a_size_[2]};
       // t = centre B - centre A: A's child moving by +q moves t by -q.
-      fill_offsets<W>(t_.offset_a, w, quarter, -1.0);
+      fill_offsets<W, kSetUp<kTested>>(t_.offset_a, w, quarter, -1.0);
       // Its depth-1 steps u_k (nearest_weights).
       for (int k = 0; k < 3; ++k)
         for (int m = 0; m < 3; ++m) steps_a_[k][m] = m == k ? -quarter[k] : 0.0;
@@ -819,6 +836,7 @@ class PairFrame {
     }
     return t_.offset_a;
   }
+  template <int kTested>
   const Lanes* offsets_b() const {
     if (!(filled_offsets_ & 2u)) {
       V w[3][kLanes / W];
@@ -826,10 +844,10 @@ class PairFrame {
       // B's local axis j moves its centre by sR e_j in A's frame.
       const Eigen::Matrix3d& sr = rel_.sr;
       V wb[3][kLanes / W];
-      for (int c = 0; c < kLanes / W; ++c)
+      for (int c = 0; c < kSetUp<kTested> / W; ++c)
         for (int j = 0; j < 3; ++j) wb[j][c] = (w[0][c] * sr(0, j) + w[1][c] * sr(1, j)) + w[2][c] * sr(2, j);
       const double quarter[3] = {0.25 * b_size_[0], 0.25 * b_size_[1], 0.25 * b_size_[2]};
-      fill_offsets<W>(t_.offset_b, wb, quarter, 1.0);
+      fill_offsets<W, kSetUp<kTested>>(t_.offset_b, wb, quarter, 1.0);
       for (int k = 0; k < 3; ++k)
         for (int m = 0; m < 3; ++m) steps_b_[k][m] = quarter[k] * sr(m, k);
       filled_offsets_ |= 2u;
@@ -921,9 +939,9 @@ template <class K, int kTested, class OnLeaf>
     uint8_t mask;        // the split box's child mask
   };
   Open open[kPathLevels + 1];
-  frame.project({0, 0, 0}, 0, {0, 0, 0}, 0, open[0].p);
+  frame.template project<kTested>({0, 0, 0}, 0, {0, 0, 0}, 0, open[0].p);
   ++result.box_tests;
-  if (!frame.overlap(open[0].p, 0, 0)) return;
+  if (!frame.template overlap<kTested>(open[0].p, 0, 0)) return;
   const int levels = frame.levels();
   if (levels == 0) {  // neither can split: the roots are the leaf pair
     result.hit = true;
@@ -939,7 +957,7 @@ template <class K, int kTested, class OnLeaf>
   for (;;) {
     // Expand the pair open at level l.
     Open& o = *top;
-    const Level& lv = frame.template level<false>(l);
+    const Level& lv = frame.template level<false, kTested>(l);
     const int side = lv.split_a ? 0 : 1;
     const uint32_t index = o.index[side];
     // The other box is a leaf and holds this one whole: any leaf below is a
@@ -1027,9 +1045,9 @@ struct SweepLevel {
 template <class K, int kTested, class OnLeaf>
 [[gnu::always_inline]] inline void sweep_all(const PairFrame<K>& frame, PairTest& result, OnLeaf on_leaf) {
   Lanes root;
-  frame.project({0, 0, 0}, 0, {0, 0, 0}, 0, root);
+  frame.template project<kTested>({0, 0, 0}, 0, {0, 0, 0}, 0, root);
   ++result.box_tests;
-  if (!frame.overlap(root, 0, 0)) return;
+  if (!frame.template overlap<kTested>(root, 0, 0)) return;
   const int levels = frame.levels();
   if (levels == 0) {  // neither can split: the roots are the leaf pair
     result.hit = true;
@@ -1040,7 +1058,7 @@ template <class K, int kTested, class OnLeaf>
   static thread_local std::vector<SweepLevel> lists;
   if (lists.size() < size_t(levels)) lists.resize(size_t(levels));
   SweepLevel* const list = lists.data();
-  std::memcpy(list[0].p[0], root, sizeof root);
+  std::memcpy(list[0].p[0], root, sizeof(double) * PairFrame<K>::template kSetUp<kTested>);
   list[0].coord[0][0] = list[0].coord[0][1] = 0;
   list[0].index[0][0] = list[0].index[0][1] = 0;
   int size[kPathLevels], head[kPathLevels];
@@ -1054,7 +1072,7 @@ template <class K, int kTested, class OnLeaf>
         result.box_tests = box_tests;
         return;
       }
-    const Level& lv = frame.template level<true>(l);
+    const Level& lv = frame.template level<true, kTested>(l);
     const int side = lv.split_a ? 0 : 1;
     const SweepLevel& in = list[l];
     const int begin = head[l], end = std::min(size[l], begin + kBatch);
@@ -1158,9 +1176,9 @@ template <class K, bool kAll, int kTested>
     const LeafPair& hint = *job.hint;
     const Coord c1 = from_coord(pair.swapped ? hint.b : hint.a), c2 = from_coord(pair.swapped ? hint.a : hint.b);
     Lanes p;
-    frame.project(c1, pair.first.depth, c2, pair.second.depth, p);
+    frame.template project<kTested>(c1, pair.first.depth, c2, pair.second.depth, p);
     ++result.box_tests;
-    if (frame.overlap(p, pair.first.depth, pair.second.depth)) {
+    if (frame.template overlap<kTested>(p, pair.first.depth, pair.second.depth)) {
       result.hit = true;
       result.leaf = hint;
       return result;
