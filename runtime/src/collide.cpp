@@ -130,8 +130,8 @@ struct Relative {
 // A_i x B_j is then zero or parallel to a face axis (A_i = +-B_j: A_i x B_k
 // is +-B's third axis, A_k x B_j A's, and A_k x B_l lies along A_i), so in
 // exact arithmetic the six face axes separate every box pair that all
-// fifteen do, and the kernel tests lanes 0..7 only (kFaceLanes): half the
-// work per child. The lanes are padded differently (by ~1e-9 of the boxes'
+// fifteen do, and the kernel tests lanes 0..7 only (kFaceLanes; 0..5 in
+// collide's portable build, kSharedAxisLanes): half the work per child. The lanes are padded differently (by ~1e-9 of the boxes'
 // size), so near the boundary the face axes alone may keep a pair that an
 // edge axis separated: a contact more, never a miss.
 bool shares_axis(const Eigen::Matrix3d& r) {
@@ -283,6 +283,10 @@ struct Portable {
   // fill all 16 lanes in one or two more vector operations; narrowing theirs
   // too made rotated pairs 2-4% slower (session 34, code laid out anew).
   static constexpr bool kNarrowSetUp = true;
+  // The lanes collide tests a pair that shares an axis on: 0..5, the six
+  // face axes, in three 2-lane chunks (lanes 6 and 7 are edge axes, which
+  // add nothing there; the AVX builds take 0..7, one or two whole chunks).
+  static constexpr int kSharedAxisLanes = 6;
   using V = Vec<kStoreLanes>;
   using M = typename Chunk<kStoreLanes>::mask;
 
@@ -346,6 +350,7 @@ struct Portable {
 struct Avx2 {
   static constexpr int kStoreLanes = 4;
   static constexpr bool kNarrowSetUp = false;  // see Portable
+  static constexpr int kSharedAxisLanes = kFaceLanes;
 
   // As Portable's, with the POPCNT instruction (a table lookup was 1-2%
   // slower here).
@@ -403,6 +408,7 @@ struct Avx2 {
 struct Avx512 {
   static constexpr int kStoreLanes = 8;
   static constexpr bool kNarrowSetUp = false;  // see Portable
+  static constexpr int kSharedAxisLanes = kFaceLanes;
 
   [[gnu::target("avx512f,popcnt")]] static uint32_t bits_below(uint32_t mask, int j) {
     return Avx2::bits_below(mask, j);
@@ -1192,8 +1198,11 @@ template <class K, bool kAll, int kTested>
 template <class K, bool kAll>
 [[gnu::always_inline]] inline PairTest run_pair(const Job& job) {
   const PairFrame<K> frame(job.pair.first, job.pair.second);
+  // collide_all's batched pass tests lanes 0..7 first (half_overlaps<0>),
+  // so it takes those 8 in every build.
+  constexpr int kSharedAxis = kAll ? kFaceLanes : K::kSharedAxisLanes;
   return frame.shares_axis() && shared_axis_shortcut.load(std::memory_order_relaxed)
-             ? test_pair<K, kAll, kFaceLanes>(job, frame)
+             ? test_pair<K, kAll, kSharedAxis>(job, frame)
              : test_pair<K, kAll, kLanes>(job, frame);
 }
 
