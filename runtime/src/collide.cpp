@@ -131,9 +131,10 @@ struct Relative {
 // is +-B's third axis, A_k x B_j A's, and A_k x B_l lies along A_i), so in
 // exact arithmetic the six face axes separate every box pair that all
 // fifteen do, and the kernel tests lanes 0..7 only (kFaceLanes; 0..5 in
-// collide's portable build, kSharedAxisLanes): half the work per child. The lanes are padded differently (by ~1e-9 of the boxes'
-// size), so near the boundary the face axes alone may keep a pair that an
-// edge axis separated: a contact more, never a miss.
+// collide's portable build, kSharedAxisLanes): half the work per child or
+// less. The lanes are padded differently (by ~1e-9 of the boxes' size), so
+// near the boundary the face axes alone may keep a pair that an edge axis
+// separated: a contact more, never a miss.
 bool shares_axis(const Eigen::Matrix3d& r) {
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j)
