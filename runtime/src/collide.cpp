@@ -279,10 +279,10 @@ struct Portable {
   // stores is not forwarded from them, it waits for them to retire.
   static constexpr int kStoreLanes = 2;
   // The pair frame's set-up (projections, radii, offsets) fills only the
-  // lanes the descent tests: at two lanes a register, the face lanes of a
-  // pair that shares an axis (shares_axis) are half the work. The AVX builds
-  // fill all 16 lanes in one or two more vector operations; narrowing theirs
-  // too made rotated pairs 2-4% slower (session 34, code laid out anew).
+  // lanes the descent tests: at two lanes a register, a pair that shares an
+  // axis (shares_axis) then fills 6 lanes of 16 (kSharedAxisLanes). The AVX
+  // builds fill all 16 lanes in one or two more vector operations; narrowing
+  // theirs too made rotated pairs 2-4% slower (session 34, code laid out anew).
   static constexpr bool kNarrowSetUp = true;
   // The lanes collide tests a pair that shares an axis on: 0..5, the six
   // face axes, in three 2-lane chunks (lanes 6 and 7 are edge axes, which
@@ -479,8 +479,8 @@ struct LaneTables {
 // A child at depth 1 sits at the root's centre +- q on each axis m of its
 // tree; weights[m] give the effect on the projections (times sign). Octants
 // 7 - j are the negations of octants j (negation is exact).
-// weights[m][c]: lanes W c..W c + W - 1 of axis m's weights.
-// Lanes 0..kFilled-1.
+// weights[m][c]: lanes W c..W c + W - 1 of axis m's weights. Only lanes
+// 0..kFilled-1 are filled (the lanes the descent tests; see kSetUp).
 template <int W, int kFilled>
 [[gnu::always_inline]] inline void fill_offsets(Lanes* offset, const Vec<W> (*weights)[kLanes / W], const double* q,
                                                 double sign) {
