@@ -164,6 +164,7 @@ void print_summary(const RunArgs& args, const Loaded& l, const RunResult& r) {
     j["box_tests"] = r.box_tests;
     j["pair_tests"] = r.pair_tests;
     j["pairs_reused"] = r.pairs_reused;
+    j["pairs_kept_apart"] = r.pairs_kept_apart;
     j["box_tests_per_pair_test"] = per_pair;
     nlohmann::ordered_json startup;
     for (const auto& [name, value] : counter_list(l.counters)) startup[name] = value;
@@ -190,6 +191,8 @@ void print_summary(const RunArgs& args, const Loaded& l, const RunResult& r) {
   std::printf("\n");
   std::printf("pair tests       %llu (%llu reused)\n", static_cast<unsigned long long>(r.pair_tests),
               static_cast<unsigned long long>(r.pairs_reused));
+  std::printf("kept apart       %llu (pair tests answered by a miss's separation)\n",
+              static_cast<unsigned long long>(r.pairs_kept_apart));
   std::printf("box tests        %llu (%.2f per pair test)\n", static_cast<unsigned long long>(r.box_tests), per_pair);
   std::printf("start-up         %llu files, %llu B mapped, %llu levels, %llu B decompressed, %llu allocations\n",
               static_cast<unsigned long long>(s.files_opened), static_cast<unsigned long long>(s.bytes_mapped),

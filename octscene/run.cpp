@@ -109,6 +109,7 @@ Result<RunResult> run_scene(const Scene& scene, const SceneModels& models, const
 
     result.pair_tests += stats.pair_tests;
     result.pairs_reused += stats.pairs_reused;
+    result.pairs_kept_apart += stats.pairs_kept_apart;
     result.box_tests += stats.box_tests;
     result.collisions += collisions.size();
     for (const Collision& c : collisions) {

@@ -50,6 +50,7 @@ struct RunResult {
   uint64_t collisions = 0;
   uint64_t pair_tests = 0;
   uint64_t pairs_reused = 0;  // pair tests answered by last frame's result (0 box tests)
+  uint64_t pairs_kept_apart = 0;  // misses answered by their separation (0 box tests)
   uint64_t box_tests = 0;          // summed over pair tests
   uint64_t collision_box_tests = 0;  // summed over reported collisions only
   // Collisions per depth pair, key (lo, hi) with lo <= hi.

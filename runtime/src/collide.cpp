@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <cstring>
 #include <functional>
+#include <limits>
 #include <type_traits>
 #include <vector>
 
@@ -692,6 +693,7 @@ class PairFrame {
     depth_a_ = a.depth;
     depth_b_ = b.depth;
     shares_axis_ = octbake::shares_axis(r);
+    scale_a_ = a.pose.scale;
   }
 
   int levels() const { return depth_a_ + depth_b_; }
@@ -741,6 +743,53 @@ class PairFrame {
     }
     return !any_lane<W>(separated);
   }
+
+  // The summed radii of box pairs at depths (da, db), lanes 0..kTested - 1.
+  template <int kTested>
+  void radii(int da, int db, Lanes& r) const {
+    for (int k = 0; k < kSetUp<kTested>; k += W) {
+      V x;
+      radius(x, k, kHalfPow[da], kHalfPow[db]);
+      store<W>(r + k, x);
+    }
+  }
+
+  // How far B may be translated relative to A (A's units) with the box pair
+  // of projections q and summed radii r still separated on one of lanes
+  // 0..kTested - 1, as this test computes it (<= 0: not separated by a
+  // margin). Lane k's projection is w_k . t (w_k: column k of t_.w), so a
+  // translation dt moves it by at most |w_k| |dt|; the radii's padding
+  // follows |t| (Relative::pad), and grows by at most 4 kRelPad |dt|. The
+  // slack, 2 pad (1 + |w_k|_1), covers the rounding of q along another path
+  // of sums (~1e-15 of the same magnitudes; pad is 1e-9 of them).
+  template <int kTested>
+  double separation(const double* q, const double* r) const {
+    if (!separation_lanes_) {
+      for (int k = 0; k < kLanes; ++k) {
+        const double w0 = t_.w[0][k], w1 = t_.w[1][k], w2 = t_.w[2][k];
+        sep_.slack[k] = 2 * rel_.pad * (1 + (std::abs(w0) + std::abs(w1) + std::abs(w2)));
+        const double norm = std::sqrt((w0 * w0 + w1 * w1) + w2 * w2);
+        sep_.per_unit[k] = norm > 0 ? 1 / (norm + 4 * kRelPad) : 0;  // lane 15 (and zero edge axes): never
+      }
+      separation_lanes_ = true;
+    }
+    using M = typename Chunk<W>::mask;
+    V best{};
+    for (int k = 0; k < kTested; k += W) {
+      V x, radius, slack, per_unit;
+      load<W>(x, q + k);
+      load<W>(radius, r + k);
+      load<W>(slack, sep_.slack + k);
+      load<W>(per_unit, sep_.per_unit + k);
+      const V gap = ((V(M(x) & INT64_MAX) - radius) - slack) * per_unit;
+      best = gap > best ? gap : best;
+    }
+    double out = 0;
+    for (int i = 0; i < W; ++i) out = std::max(out, best[i]);
+    return out;
+  }
+  // A's scale: A's units to world units.
+  double scale_a() const { return scale_a_; }
 
   // Does the padded box of one side lie inside the other's, with a margin of
   // one pad for rounding? Then every leaf under the inner box overlaps the
@@ -889,6 +938,7 @@ class PairFrame {
   const ObjectTree *tree_a_, *tree_b_;
   int depth_a_, depth_b_;
   bool shares_axis_;
+  double scale_a_;
   // Filled lazily (the frame is used by one descent only).
   mutable LaneTables t_;
   // The depth-1 steps u_k, [k][m], filled with their offsets.
@@ -897,6 +947,11 @@ class PairFrame {
   alignas(64) mutable Lanes level_offsets_[kPathLevels][8];
   mutable int known_levels_ = 0;  // levels 0..known_levels_ - 1 are worked out
   mutable uint32_t filled_offsets_ = 0;
+  // separation()'s per-lane slack and 1 / (|w_k| + 4 kRelPad), on first use.
+  mutable struct {
+    Lanes slack, per_unit;
+  } sep_;
+  mutable bool separation_lanes_ = false;
 };
 
 // Box coordinates packed in one word, 21 bits per axis: a child is its parent
@@ -933,9 +988,17 @@ bool some_leaf(const ObjectTree& tree, int depth, int d, uint32_t index, const C
 // open pair (projections, indices, coordinates) and its overlapping children
 // still to visit, in visiting order. A child's projections are recomputed
 // from its parent's when it is visited (the same sums the kernel did).
-template <class K, int kTested, class OnLeaf>
+//
+// With kSeparation, after a miss `separation` is the least, over the box
+// pairs found separated (the roots, or children not visited), of how far B
+// may move with that pair still separated (PairFrame::separation; A's units):
+// every leaf pair lies under one of them, so moving B less than that leaves
+// the descent's answer a miss. Once it is below `floor` (A's units) it is
+// not worked out further (0 is returned).
+template <class K, int kTested, bool kSeparation, class OnLeaf>
 [[gnu::always_inline]] inline void descend(const PairFrame<K>& frame, const PlacedTree& a, const PlacedTree& b,
-                                           PairTest& result, OnLeaf on_leaf) {
+                                           PairTest& result, double& separation, double floor,
+                                           OnLeaf on_leaf) {
   struct Open {
     alignas(64) Lanes p;
     Packed coord[2];     // A's, B's
@@ -948,7 +1011,15 @@ template <class K, int kTested, class OnLeaf>
   Open open[kPathLevels + 1];
   frame.template project<kTested>({0, 0, 0}, 0, {0, 0, 0}, 0, open[0].p);
   ++result.box_tests;
-  if (!frame.template overlap<kTested>(open[0].p, 0, 0)) return;
+  if (!frame.template overlap<kTested>(open[0].p, 0, 0)) {
+    if constexpr (kSeparation) {
+      Lanes r;
+      frame.template radii<kTested>(0, 0, r);
+      separation = frame.template separation<kTested>(open[0].p, r);
+    }
+    return;
+  }
+  if constexpr (kSeparation) separation = std::numeric_limits<double>::infinity();
   const int levels = frame.levels();
   if (levels == 0) {  // neither can split: the roots are the leaf pair
     result.hit = true;
@@ -985,6 +1056,12 @@ template <class K, int kTested, class OnLeaf>
     const uint32_t hits =
         PairFrame<K>::template children_overlap<false, kTested>(lv, o.p, kOctants.octant[mask], count);
     box_tests += uint64_t(count);
+    if constexpr (kSeparation)
+      for (uint32_t apart = separation >= floor ? mask & ~hits : 0; apart != 0; apart &= apart - 1) {
+        Lanes q;
+        K::template add_scaled<kTested>(q, o.p, lv.offset[std::countr_zero(apart)], lv.scale);
+        separation = std::min(separation, frame.template separation<kTested>(q, lv.radius));
+      }
     o.left = 0;
     if (hits != 0) {
       if ((hits & (hits - 1)) == 0) {  // one child
@@ -1163,18 +1240,21 @@ struct Canonical {
 };
 
 // One pair test: collide() with an optional leaf pair (in the caller's order)
-// to try first, or collide_all() if `all` is given.
+// to try first, collide_all() if `all` is given, or collide() with its
+// separation if `separation` is.
 struct Job {
   const Canonical& pair;
   const LeafPair* hint;
   std::vector<LeafPair>* all;
+  double* separation;
 };
+enum class Kind { first_hit, all, separation };
 
-template <class K, bool kAll, int kTested>
+template <class K, Kind kKind, int kTested>
 [[gnu::always_inline]] inline PairTest test_pair(const Job& job, const PairFrame<K>& frame) {
   const Canonical& pair = job.pair;
   PairTest result;
-  if constexpr (kAll) {
+  if constexpr (kKind == Kind::all) {
     sweep_all<K, kTested>(frame, result,
                           [&](const Coord& ca, const Coord& cb) { job.all->push_back(pair.to_caller(ca, cb)); });
     return result;
@@ -1191,28 +1271,33 @@ template <class K, bool kAll, int kTested>
       return result;
     }
   }
-  descend<K, kTested>(frame, pair.first, pair.second, result,
-                      [&](const Coord& ca, const Coord& cb) { result.leaf = pair.to_caller(ca, cb); });
+  constexpr bool kSeparation = kKind == Kind::separation;
+  double separation = 0;
+  const double floor = kSeparation ? *job.separation / frame.scale_a() : 0;
+  descend<K, kTested, kSeparation>(frame, pair.first, pair.second, result, separation, floor,
+                                   [&](const Coord& ca, const Coord& cb) { result.leaf = pair.to_caller(ca, cb); });
+  if constexpr (kSeparation)
+    *job.separation = result.hit || !(separation >= floor) ? 0.0 : separation * frame.scale_a();
   return result;
 }
 
-template <class K, bool kAll>
+template <class K, Kind kKind>
 [[gnu::always_inline]] inline PairTest run_pair(const Job& job) {
   const PairFrame<K> frame(job.pair.first, job.pair.second);
   // collide_all's batched pass tests lanes 0..7 first (half_overlaps<0>),
   // so it takes those 8 in every build.
-  constexpr int kSharedAxis = kAll ? kFaceLanes : K::kSharedAxisLanes;
+  constexpr int kSharedAxis = kKind == Kind::all ? kFaceLanes : K::kSharedAxisLanes;
   return frame.shares_axis() && shared_axis_shortcut.load(std::memory_order_relaxed)
-             ? test_pair<K, kAll, kSharedAxis>(job, frame)
-             : test_pair<K, kAll, kLanes>(job, frame);
+             ? test_pair<K, kKind, kSharedAxis>(job, frame)
+             : test_pair<K, kKind, kLanes>(job, frame);
 }
 
 // One function per kernel build and per kind of test, so that neither
 // descent's code is laid out around the other's.
 using Runner = PairTest (*)(const Job&);
-template <bool kAll>
+template <Kind kKind>
 PairTest run_portable(const Job& job) {
-  return run_pair<Portable, kAll>(job);
+  return run_pair<Portable, kKind>(job);
 }
 #ifdef OCTBAKE_X86_KERNELS
 // Both return with the upper halves of the vector registers cleared, on every
@@ -1222,31 +1307,32 @@ PairTest run_portable(const Job& job) {
 // which on Intel cores it must merge: every pair test through the containment
 // early out took ~150 ns longer (small-on-large pairs slower than in the
 // portable build; bench_pair).
-template <bool kAll>
+template <Kind kKind>
 [[gnu::target("avx2,fma"), gnu::flatten]] PairTest run_avx2(const Job& job) {
-  const PairTest result = run_pair<Avx2, kAll>(job);
+  const PairTest result = run_pair<Avx2, kKind>(job);
   _mm256_zeroupper();
   return result;
 }
-template <bool kAll>
+template <Kind kKind>
 [[gnu::target("avx512f"), gnu::flatten]] PairTest run_avx512(const Job& job) {
-  const PairTest result = run_pair<Avx512, kAll>(job);
+  const PairTest result = run_pair<Avx512, kKind>(job);
   _mm256_zeroupper();
   return result;
 }
 #endif
 
-template <bool kAll>
+template <Kind kKind>
 Runner runner_of(BoxKernel k) {
 #ifdef OCTBAKE_X86_KERNELS
-  if (k == BoxKernel::avx512) return run_avx512<kAll>;
-  if (k == BoxKernel::avx2) return run_avx2<kAll>;
+  if (k == BoxKernel::avx512) return run_avx512<kKind>;
+  if (k == BoxKernel::avx2) return run_avx2<kKind>;
 #endif
   (void)k;
-  return run_portable<kAll>;
+  return run_portable<kKind>;
 }
 
-PairTest run(const PlacedTree& a, const PlacedTree& b, const LeafPair* hint, std::vector<LeafPair>* all) {
+PairTest run(const PlacedTree& a, const PlacedTree& b, const LeafPair* hint, std::vector<LeafPair>* all,
+             double* separation = nullptr) {
   check(a);
   check(b);
   static const BoxKernel best = cpu_has(BoxKernel::avx512) ? BoxKernel::avx512
@@ -1255,7 +1341,10 @@ PairTest run(const PlacedTree& a, const PlacedTree& b, const LeafPair* hint, std
   const BoxKernel k = chosen_kernel.load(std::memory_order_relaxed);
   const Canonical pair(a, b);
   const BoxKernel use = k == BoxKernel::best ? best : k;
-  return (all ? runner_of<true>(use) : runner_of<false>(use))(Job{pair, hint, all});
+  const Runner runner = all          ? runner_of<Kind::all>(use)
+                        : separation ? runner_of<Kind::separation>(use)
+                                     : runner_of<Kind::first_hit>(use);
+  return runner(Job{pair, hint, all, separation});
 }
 
 }  // namespace
@@ -1269,6 +1358,10 @@ bool use_box_kernel(BoxKernel kernel) {
 }
 
 PairTest collide(const PlacedTree& a, const PlacedTree& b) { return run(a, b, nullptr, nullptr); }
+
+PairTest collide(const PlacedTree& a, const PlacedTree& b, double& separation) {
+  return run(a, b, nullptr, nullptr, &separation);
+}
 
 PairTest collide(const PlacedTree& a, const PlacedTree& b, PairCache& cache) {
   const bool usable = cache.tree_a != nullptr && cache.tree_a == a.tree && cache.tree_b == b.tree &&

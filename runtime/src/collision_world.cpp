@@ -532,6 +532,25 @@ bool same_pose(const Pose& a, const Pose& b) { return same_frame_of(a, b) && sam
 bool same_placement(const PlacedTree& a, const PlacedTree& b) {
   return a.tree == b.tree && a.depth == b.depth && same_pose(a.pose, b.pose);
 }
+// The same tree, rotation, scale and depth: only the position may differ.
+bool same_but_position(const PlacedTree& a, const PlacedTree& b) {
+  return a.tree == b.tree && a.depth == b.depth && same_frame_of(a.pose, b.pose);
+}
+// A miss tested at (a0, b0) with `separation` (collide()'s) is still one at
+// (a, b): the same but positions, and b moved relative to a by less than it.
+// The difference is taken as collide() takes it (b's position less a's).
+// Its length is taken scaled to its largest coordinate: squared, a move of
+// a scene scaled by 2^-1000 underflowed to 0 (every miss then kept apart).
+double relative_move(const PlacedTree& a0, const PlacedTree& b0, const PlacedTree& a, const PlacedTree& b) {
+  const Eigen::Vector3d move = (b.pose.position - a.pose.position) - (b0.pose.position - a0.pose.position);
+  const double largest = move.cwiseAbs().maxCoeff();
+  return largest > 0 ? largest * (move / largest).norm() : largest;
+}
+bool still_apart(const PlacedTree& a0, const PlacedTree& b0, double separation, const PlacedTree& a,
+                 const PlacedTree& b) {
+  return separation > 0 && same_but_position(a0, a) && same_but_position(b0, b) &&
+         relative_move(a0, b0, a, b) < separation;
+}
 
 }  // namespace
 
@@ -947,7 +966,7 @@ void CollisionWorld::test_pairs(size_t begin, size_t end) {
     PairResult& r = results_[k];
     if (r.apart) {
       r.test = PairTest{.hit = false, .box_tests = 1, .leaf = {}};
-      r.reused = false;
+      r.reused = r.kept_apart = false;
       continue;
     }
     const PlacedTree pa = placed(a), pb = placed(b);
@@ -957,15 +976,37 @@ void CollisionWorld::test_pairs(size_t begin, size_t end) {
     // it again), so none of it is redone, and the record (estimate and
     // placements) stays as it is.
     const PairResult* last = r.last != kNone ? &last_results_[r.last] : nullptr;
+    // Or kept apart: a miss whose objects only translated, by less than its
+    // separation; the record keeps the placements it was tested at, which
+    // later frames are measured from.
     r.reused = last && same_placement(tested.a, pa) && same_placement(tested.b, pb);
-    if (r.reused) {
+    r.kept_apart = !r.reused && last && !last->test.hit && still_apart(tested.a, tested.b, tested.separation, pa, pb);
+    if (r.reused || r.kept_apart) {
       r.test = PairTest{.hit = last->test.hit, .box_tests = 0, .leaf = last->test.leaf};
       continue;
     }
+    tested.separation = 0;
     if (last && last->test.hit) {
       PairCache hint{tested.a.tree, tested.b.tree, tested.a.depth, tested.b.depth, last->test.leaf};
       r.test = collide(pa, pb, hint);
+    } else if (last && same_but_position(tested.a, pa) && same_but_position(tested.b, pb)) {
+      // Moving without turning: with collide()'s separation the next frames
+      // may need no test. It is worth knowing only if it outlasts a step like
+      // this one (the move since the last test); a pair whose separation did
+      // not is not asked again for its next 8 tests, then 16, ... 128 (an
+      // ask costs up to about a test more).
+      if (tested.separation_rest > 0) {
+        --tested.separation_rest;
+        r.test = collide(pa, pb);
+      } else {
+        tested.separation = relative_move(tested.a, tested.b, pa, pb);
+        r.test = collide(pa, pb, tested.separation);
+        const bool lasts = r.test.hit || tested.separation > 0;
+        tested.separation_wait = lasts ? 0 : uint8_t(std::clamp(2 * tested.separation_wait, 8, 128));
+        tested.separation_rest = tested.separation_wait;
+      }
     } else {
+      tested.separation_rest = tested.separation_wait = 0;  // (a record new to the pair holds another's)
       r.test = collide(pa, pb);
     }
     if (r.test.hit) tested.estimate = estimate_contact(leaf_box(pa, r.test.leaf.a), leaf_box(pb, r.test.leaf.b));
@@ -1191,6 +1232,7 @@ DetectStats CollisionWorld::detect(std::vector<Contact>& out) {
     const PairResult& r = results_[k];
     stats.box_tests += r.test.box_tests;
     stats.pairs_reused += r.reused;
+    stats.pairs_kept_apart += r.kept_apart;
     if (!r.test.hit) continue;
     // The depths as tested (the record's), the generations from
     // live_generation_: no slot is read here.

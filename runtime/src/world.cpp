@@ -79,6 +79,7 @@ FrameStats World::step(std::vector<Collision>& collisions) {
   FrameStats stats;
   stats.pair_tests = d.pair_tests;
   stats.pairs_reused = d.pairs_reused;
+  stats.pairs_kept_apart = d.pairs_kept_apart;
   stats.box_tests = d.box_tests;
   stats.collisions = d.contacts;
   stats.area_refreshes = d.area_computations;

@@ -126,6 +126,18 @@ OCTBAKE_API PairTest collide(const PlacedTree& a, const PlacedTree& b);
 // box_tests and leaf may differ (another overlapping leaf pair may prove it).
 OCTBAKE_API PairTest collide(const PlacedTree& a, const PlacedTree& b, PairCache& cache);
 
+// collide(), and after a miss its separation: how far b may be translated
+// relative to a (world units, any direction) with collide() still finding no
+// contact, the two trees, depths, rotations and scales kept bit for bit
+// (every box pair the descent found separated stays so, with a slack for the
+// padding following the positions and for rounding). `separation` goes in as
+// the least worth knowing (>= 0): below it, its working out stops and 0 comes
+// back. 0 after a hit; infinite if no leaf pair lies under the roots. It costs
+// more than collide() (each separated child's projections again until the
+// floor is passed); CollisionWorld asks for it for pairs that moved without
+// turning, to answer their next frames without a test.
+OCTBAKE_API PairTest collide(const PlacedTree& a, const PlacedTree& b, double& separation);
+
 // A tree's root box under a pose, apart from the pose's position: what
 // roots_apart reads, worked out once per rotation and scale (CollisionWorld
 // keeps one per object).

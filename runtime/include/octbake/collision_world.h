@@ -165,9 +165,12 @@ struct CollisionSettings {
   // proved its contact last frame (collide() with a PairCache), and a pair
   // tested last frame on the same trees, poses (bit for bit) and depths as
   // now is not tested again: its result is last frame's, with 0 box tests
-  // (the static scenery of a scene). Same contacts either way; only
-  // box-test counts differ (fewer on coherent motion), and they stay
-  // deterministic.
+  // (the static scenery of a scene). A pair that missed, whose objects
+  // since only translated (trees, depths, rotations and scales the same), is
+  // not tested while they moved apart or together by less than the
+  // separation collide() gave it (DetectStats::pairs_kept_apart). Same
+  // contacts either way; only box-test counts differ (fewer on coherent
+  // motion), and they stay deterministic.
   bool coherence = true;
 };
 
@@ -206,6 +209,11 @@ struct DetectStats {
   // Pairs answered by last frame's result (see CollisionSettings::coherence):
   // counted in pair_tests, with 0 box tests.
   uint64_t pairs_reused = 0;
+  // Misses answered by collide()'s separation (CollisionSettings::coherence):
+  // the pair's objects only translated since its last test, by less than
+  // the separation it gave. Counted in pair_tests (not in pairs_reused),
+  // with 0 box tests.
+  uint64_t pairs_kept_apart = 0;
 };
 
 struct RayHit {
@@ -368,7 +376,7 @@ class OCTBAKE_API CollisionWorld {
   // The handle living in `slot`, if any.
   std::optional<ObjectHandle> handle_at(uint32_t slot) const;
   // Memory held for pair tests: the records of what each candidate pair was
-  // tested on and its contact estimate, 544 bytes each. detect() keeps one
+  // tested on and its contact estimate, 560 bytes each. detect() keeps one
   // per pair whose roots are not apart and reuses those of pairs gone, so
   // this never exceeds the most pair tests two consecutive frames had.
   size_t pair_records() const { return records_.size(); }
@@ -474,10 +482,18 @@ class OCTBAKE_API CollisionWorld {
     uint32_t record = kNone;  // its TestRecord in records_ (not apart)
     bool apart = false;  // roots_apart, and last frame no hit: test is one box test, a miss
     bool reused = false;  // test and estimate are last's, with 0 box tests
+    bool kept_apart = false;  // a miss by the separation of the pair's last test, with 0 box tests
   };
   struct TestRecord {  // read and written only for the pair that holds it
     PlacedTree a, b;  // the placements last tested
     ContactEstimate estimate;  // with that test's hit
+    // After a miss tested with collide()'s separation: how far b may move
+    // relative to a (world units) with the same trees, depths, rotations and
+    // scales and the answer still a miss; else 0.
+    double separation = 0;
+    // Tests left before the separation is asked for again, and the last such
+    // wait (see test_pairs).
+    uint8_t separation_rest = 0, separation_wait = 0;
   };
   std::vector<std::pair<uint32_t, uint32_t>> pair_room_, spilled_pairs_;  // collect_pairs: the scan's room, overflow
   std::vector<uint32_t> stale_;  // objects in pairs whose depth is stale
@@ -500,7 +516,9 @@ class OCTBAKE_API CollisionWorld {
   // tried first: only an occupied leaf pair that still overlaps counts, so a
   // stale one (a slot reused, a depth changed) costs one box test and is
   // never a false hit. The whole result is reused only while both objects'
-  // trees, poses (bit for bit) and depths are those tested.
+  // trees, poses (bit for bit) and depths are those tested, or, after a miss,
+  // while their trees, depths, rotations and scales are and they have moved
+  // apart or together by less than its separation (TestRecord).
   std::vector<std::pair<uint32_t, uint32_t>> last_pairs_;
   std::vector<PairResult> last_results_;
   std::vector<TestRecord> records_;     // of the pairs in results_ (and last_results_ until assign_records)

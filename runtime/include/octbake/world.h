@@ -61,6 +61,7 @@ struct Collision {
 struct FrameStats {
   uint64_t pair_tests = 0;  // candidate pairs tested with ObjectTrees
   uint64_t pairs_reused = 0;  // of those, answered by last frame's result (DetectStats::pairs_reused)
+  uint64_t pairs_kept_apart = 0;  // of those, misses kept by their separation (DetectStats::pairs_kept_apart)
   uint64_t box_tests = 0;
   uint64_t collisions = 0;
   uint64_t area_refreshes = 0;  // objects whose pixel area was recomputed

@@ -2,7 +2,8 @@
 // random trees and poses (sizes up to 1000x apart, flat trees, far offsets)
 // the same hit at every depth pair and, from collide_all, the same set of
 // overlapping leaf pairs; and every build of the box-test kernel the CPU has
-// gives identical results, counts included.
+// gives identical results, counts included. And collide()'s separation
+// after a miss keeps the miss under every translation shorter than it.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -276,6 +277,65 @@ TEST(CollideReference, SmallAgainstLargeTakesFewerBoxTests) {
   }
   ASSERT_GT(hits, 10) << "of " << runs;  // sparse random trees: a tiny object often falls in a gap
   EXPECT_LT(5 * fast_tests, ref_tests) << fast_tests << " vs " << ref_tests << " box tests over " << hits << " hits";
+}
+
+// collide()'s separation after a miss: B translated by less than it, along
+// each of the pair's fifteen box axes (where the binding box pair is closest
+// to touching) and random directions, both ways, is still a miss, in every
+// kernel build; the same hits and counts as collide(); and most misses get a
+// margin (it is not 0 all the time).
+TEST(CollideReference, SeparationKeepsTheMissUnderEveryTranslationShorterThanIt) {
+  std::vector<BoxKernel> kernels;
+  for (const BoxKernel k : {BoxKernel::portable, BoxKernel::avx2, BoxKernel::avx512})
+    if (use_box_kernel(k)) kernels.push_back(k);
+  std::mt19937 rng(36);
+  int misses = 0, with_margin = 0, moves = 0;
+  for (int run = 0; run < kRuns; ++run) {
+    const int depth_a = 1 + int(rng() % 4), depth_b = 1 + int(rng() % 4);
+    const ObjectTree ta = random_tree(rng, depth_a), tb = random_tree(rng, depth_b);
+    const auto [pa, pb] = random_poses(rng);
+    const BoxKernel kernel = kernels[size_t(run) % kernels.size()];
+    ASSERT_TRUE(use_box_kernel(kernel));
+    const Eigen::Matrix3d ra = pa.rotation.toRotationMatrix(), rb = pb.rotation.toRotationMatrix();
+    std::vector<Eigen::Vector3d> dirs;
+    for (int i = 0; i < 3; ++i) {
+      dirs.push_back(ra.col(i));
+      dirs.push_back(rb.col(i));
+      for (int j = 0; j < 3; ++j)
+        if (const Eigen::Vector3d c = ra.col(i).cross(rb.col(j)); c.norm() > 1e-6) dirs.push_back(c.normalized());
+    }
+    for (int k = 0; k < 4; ++k) dirs.push_back(random_rotation(rng) * Eigen::Vector3d::UnitX());
+    for (int da = 0; da <= depth_a; ++da)
+      for (int db = 0; db <= depth_b; ++db) {
+        const PlacedTree a{&ta, pa, da}, b{&tb, pb, db};
+        double separation = -1;
+        const PairTest with = collide(a, b, separation), plain = collide(a, b);
+        const std::string at =
+            "run " + std::to_string(run) + " depths " + std::to_string(da) + "-" + std::to_string(db);
+        ASSERT_EQ(with.hit, plain.hit) << at;
+        ASSERT_EQ(with.box_tests, plain.box_tests) << at;
+        ASSERT_EQ(key(with.leaf), key(plain.leaf)) << at;
+        if (with.hit) {
+          ASSERT_EQ(separation, 0) << at;
+          continue;
+        }
+        ++misses;
+        ASSERT_GE(separation, 0) << at;
+        if (!(separation > 0) || !std::isfinite(separation)) continue;
+        ++with_margin;
+        for (const Eigen::Vector3d& dir : dirs)
+          for (const double sign : {-1.0, 1.0})
+            for (const double share : {0.999999, 0.5}) {
+              PlacedTree moved = b;
+              moved.pose.position += sign * share * separation * dir;
+              ASSERT_FALSE(collide(a, moved).hit) << at << " moved by " << share << " of " << separation;
+              ++moves;
+            }
+      }
+  }
+  ASSERT_TRUE(use_box_kernel(BoxKernel::best));
+  EXPECT_GT(with_margin, misses * 3 / 4) << "of " << misses << " misses";
+  EXPECT_GT(moves, 1000);
 }
 
 }  // namespace

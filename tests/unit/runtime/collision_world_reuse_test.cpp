@@ -1,9 +1,13 @@
 // Temporal coherence's reuse: a pair tested last frame on the same trees,
 // poses and depths as now is answered by last frame's result (0 box
-// tests), and any change to one of those is tested again.
+// tests), and any change to one of those is tested again; a miss whose
+// objects only translated is answered while they moved less than its
+// separation.
 #include <gtest/gtest.h>
 
 #include <bit>
+#include <memory>
+#include <tuple>
 
 #include "collision_world_util.h"
 
@@ -161,6 +165,65 @@ TEST_P(Reuse, UnchangedPairsKeepTheirAnswerAndAnyChangeIsTestedAgain) {
 
 INSTANTIATE_TEST_SUITE_P(Coherence, Reuse, ::testing::Bool(),
                          [](const auto& info) { return info.param ? "On" : "Off"; });
+
+// A crowd that only translates, every object moving every frame (so no pose
+// repeats bit for bit): with coherence, misses are answered from collide()'s
+// separation while the objects have moved less than it, and the contacts are
+// frame by frame those of a world without coherence, which tests every pair.
+TEST(Reuse, MissesKeptBySeparationGiveTheContactsOfFullTests) {
+  std::mt19937 rng(41);
+  const std::vector<ObjectTree> trees = test::random_trees(rng, 5);
+  CollisionWorld* worlds[2];
+  std::unique_ptr<CollisionWorld> owned[2];
+  for (int w = 0; w < 2; ++w) {
+    CollisionSettings s;
+    s.coherence = w == 1;
+    s.bounds = {Eigen::Vector3d::Constant(-10), Eigen::Vector3d::Constant(10)};
+    s.world_depth = 3;
+    s.lod.policy = LodPolicy::fixed;
+    s.lod.max_depth = 4;
+    owned[w] = std::make_unique<CollisionWorld>(s);
+    worlds[w] = owned[w].get();
+  }
+  struct Body {
+    ObjectHandle h[2];
+    Pose pose;
+    Eigen::Vector3d velocity;
+  };
+  std::vector<Body> bodies(40);
+  for (Body& b : bodies) {
+    b.pose.position = test::random_point(rng, -4, 4);
+    // Far from the origin one time in four: separations there are measured
+    // from positions near 1e7.
+    if (test::below(rng, 4) == 0) b.pose.position += Eigen::Vector3d(1e7, -1e7, 1e7);
+    b.pose.rotation = test::maybe_rotation(rng);
+    b.pose.scale = test::uniform(rng, 0.05, 0.15);
+    b.velocity = test::random_point(rng, -0.02, 0.02);
+    const ObjectTree* tree = &trees[test::below(rng, uint32_t(trees.size()))];
+    for (int w = 0; w < 2; ++w) b.h[w] = *worlds[w]->create(TreeSource::fixed(tree), b.pose);
+  }
+  const auto key = [](const Contact& c) { return std::tuple(c.a.slot, c.b.slot, c.depth_a, c.depth_b); };
+  uint64_t kept_apart = 0, reused = 0, contacts = 0, box_tests[2] = {0, 0};
+  for (int frame = 0; frame < 20 * test::kWork; ++frame) {
+    std::vector<Contact> got[2];
+    for (int w = 0; w < 2; ++w) {
+      const DetectStats stats = worlds[w]->detect(got[w]);
+      box_tests[w] += stats.box_tests;
+      if (w == 1) kept_apart += stats.pairs_kept_apart, reused += stats.pairs_reused;
+    }
+    ASSERT_EQ(got[0].size(), got[1].size()) << "frame " << frame;
+    for (size_t i = 0; i < got[0].size(); ++i) ASSERT_EQ(key(got[0][i]), key(got[1][i])) << "frame " << frame;
+    contacts += got[0].size();
+    for (Body& b : bodies) {
+      b.pose.position += b.velocity;
+      for (int w = 0; w < 2; ++w) ASSERT_TRUE(worlds[w]->set_pose(b.h[w], b.pose).ok());
+    }
+  }
+  EXPECT_GT(contacts, 0u);
+  EXPECT_GT(kept_apart, 0u);
+  EXPECT_EQ(reused, 0u);  // every pose changed every frame
+  EXPECT_LT(box_tests[1], box_tests[0]);
+}
 
 }  // namespace
 }  // namespace octbake
