@@ -528,28 +528,18 @@ bool same_frame_of(const Pose& a, const Pose& b) {
 }
 // Bitwise the same pose: set_pose is then a no-op (the stored pose was checked).
 bool same_pose(const Pose& a, const Pose& b) { return same_frame_of(a, b) && same_bits(a.position, b.position); }
-// The same tree, pose and depth: collide() gives the same result.
-bool same_placement(const PlacedTree& a, const PlacedTree& b) {
-  return a.tree == b.tree && a.depth == b.depth && same_pose(a.pose, b.pose);
-}
 // The same tree, rotation, scale and depth: only the position may differ.
 bool same_but_position(const PlacedTree& a, const PlacedTree& b) {
   return a.tree == b.tree && a.depth == b.depth && same_frame_of(a.pose, b.pose);
 }
-// A miss tested at (a0, b0) with `separation` (collide()'s) is still one at
-// (a, b): the same but positions, and b moved relative to a by less than it.
-// The difference is taken as collide() takes it (b's position less a's).
-// Its length is taken scaled to its largest coordinate: squared, a move of
-// a scene scaled by 2^-1000 underflowed to 0 (every miss then kept apart).
+// How far b moved relative to a from (a0, b0), the difference taken as
+// collide() takes it (b's position less a's). Its length is taken scaled to
+// its largest coordinate: squared, a move of a scene scaled by 2^-1000
+// underflowed to 0 (every miss then kept apart).
 double relative_move(const PlacedTree& a0, const PlacedTree& b0, const PlacedTree& a, const PlacedTree& b) {
   const Eigen::Vector3d move = (b.pose.position - a.pose.position) - (b0.pose.position - a0.pose.position);
   const double largest = move.cwiseAbs().maxCoeff();
   return largest > 0 ? largest * (move / largest).norm() : largest;
-}
-bool still_apart(const PlacedTree& a0, const PlacedTree& b0, double separation, const PlacedTree& a,
-                 const PlacedTree& b) {
-  return separation > 0 && same_but_position(a0, a) && same_but_position(b0, b) &&
-         relative_move(a0, b0, a, b) < separation;
 }
 
 }  // namespace
@@ -976,11 +966,15 @@ void CollisionWorld::test_pairs(size_t begin, size_t end) {
     // it again), so none of it is redone, and the record (estimate and
     // placements) stays as it is.
     const PairResult* last = r.last != kNone ? &last_results_[r.last] : nullptr;
+    // At most the positions changed since the test.
+    const bool only_moved = last && same_but_position(tested.a, pa) && same_but_position(tested.b, pb);
+    r.reused = only_moved && same_bits(tested.a.pose.position, pa.pose.position) &&
+               same_bits(tested.b.pose.position, pb.pose.position);
     // Or kept apart: a miss whose objects only translated, by less than its
     // separation; the record keeps the placements it was tested at, which
     // later frames are measured from.
-    r.reused = last && same_placement(tested.a, pa) && same_placement(tested.b, pb);
-    r.kept_apart = !r.reused && last && !last->test.hit && still_apart(tested.a, tested.b, tested.separation, pa, pb);
+    r.kept_apart = !r.reused && only_moved && !last->test.hit && tested.separation > 0 &&
+                   relative_move(tested.a, tested.b, pa, pb) < tested.separation;
     if (r.reused || r.kept_apart) {
       r.test = PairTest{.hit = last->test.hit, .box_tests = 0, .leaf = last->test.leaf};
       continue;
@@ -989,7 +983,7 @@ void CollisionWorld::test_pairs(size_t begin, size_t end) {
     if (last && last->test.hit) {
       PairCache hint{tested.a.tree, tested.b.tree, tested.a.depth, tested.b.depth, last->test.leaf};
       r.test = collide(pa, pb, hint);
-    } else if (last && same_but_position(tested.a, pa) && same_but_position(tested.b, pb)) {
+    } else if (only_moved) {
       // Moving without turning: with collide()'s separation the next frames
       // may need no test. It is worth knowing only if it outlasts a step like
       // this one (the move since the last test); a pair whose separation did
