@@ -9,6 +9,10 @@
 //   BM_All/<impl>/<pose>: collide_all at 6-6 (no early out): box-test speed.
 //   BM_Coherent/<cache>: 200 thesis pairs moving a little for 50 frames, with
 //     and without a PairCache per pair.
+//   BM_Separation/<pose>/<ask>: a 6-6 miss (roots-only poses) with its
+//     separation worked out in full (ask 1: floor 0) or with a floor no
+//     separation reaches (2: an ask that fails at once), each timed beside a
+//     plain call: the cost of CollisionWorld's separation asks.
 // impl 0 = collide, 1 = collide_reference. Counters: box tests per call,
 // ns per box test (CPU time), hit.
 //   cmake -B build-bench -DCMAKE_BUILD_TYPE=Release -DOCTBAKE_BENCH=ON
@@ -18,9 +22,11 @@
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
@@ -284,6 +290,38 @@ void BM_Coherent(benchmark::State& state) {
   state.SetLabel(cached ? "with PairCache" : "without cache");
 }
 
+// args: pose (2 or 3: roots only), ask (see the header). Each iteration
+// times a plain call and an ask back to back (this host's speed drifts
+// within seconds), so ask_over_plain is a ratio of one run.
+void BM_Separation(benchmark::State& state) {
+  const int kind = int(state.range(0)), ask = int(state.range(1));
+  const auto [a, b] = spider_duck_case(kind, kDepth, kDepth);
+  using Clock = std::chrono::steady_clock;
+  PairTest r;
+  double separation = 0;
+  Clock::duration plain{}, asked{};
+  for (auto _ : state) {
+    const auto t0 = Clock::now();
+    r = collide(a, b);
+    benchmark::DoNotOptimize(r);
+    const auto t1 = Clock::now();
+    separation = ask == 1 ? 0.0 : std::numeric_limits<double>::max();
+    r = collide(a, b, separation);
+    benchmark::DoNotOptimize(r);
+    benchmark::DoNotOptimize(separation);
+    plain += t1 - t0;
+    asked += Clock::now() - t1;
+  }
+  const double n = double(state.iterations());
+  state.counters["plain_ns"] = std::chrono::duration<double, std::nano>(plain).count() / n;
+  state.counters["ask_ns"] = std::chrono::duration<double, std::nano>(asked).count() / n;
+  state.counters["ask_over_plain"] = double(asked.count()) / double(plain.count());
+  state.counters["box_tests"] = double(r.box_tests);
+  state.counters["hit"] = r.hit;
+  state.counters["separation"] = separation;
+  state.SetLabel(std::string(kPoseNames[kind]) + (ask == 1 ? " separation" : " failing ask"));
+}
+
 // Best of N (run with --benchmark_repetitions=N): the least disturbed run.
 auto best_of = [](const std::vector<double>& v) { return *std::min_element(v.begin(), v.end()); };
 BENCHMARK(BM_Pair)->Apply(pair_args)->ComputeStatistics("min", best_of);
@@ -291,6 +329,7 @@ BENCHMARK(BM_RootsApart)->DenseRange(0, 5)->ComputeStatistics("min", best_of);
 BENCHMARK(BM_Thesis)->ArgsProduct({{0, 1}, {0, 1, 2}})->ComputeStatistics("min", best_of);
 BENCHMARK(BM_All)->ArgsProduct({{0, 1}, {0, 1}})->ComputeStatistics("min", best_of);
 BENCHMARK(BM_Coherent)->Arg(0)->Arg(1)->ComputeStatistics("min", best_of);
+BENCHMARK(BM_Separation)->ArgsProduct({{2, 3}, {1, 2}})->ComputeStatistics("min", best_of);
 
 }  // namespace
 }  // namespace octbake
