@@ -365,7 +365,7 @@ struct Avx2 {
     return uint32_t(std::popcount(mask & ((1u << j) - 1)));
   }
 
-  [[gnu::target("avx2")]] static bool any_at_least(__m256d x, __m256d y) {
+  [[gnu::target("avx2")]] static bool any_at_least(const __m256d& x, const __m256d& y) {
     return _mm256_movemask_pd(_mm256_cmp_pd(x, y, _CMP_GE_OQ)) != 0;
   }
 
@@ -425,7 +425,7 @@ struct Avx512 {
     return Avx2::bits_below(mask, j);
   }
 
-  [[gnu::target("avx512f")]] static bool any_at_least(__m512d x, __m512d y) {
+  [[gnu::target("avx512f")]] static bool any_at_least(const __m512d& x, const __m512d& y) {
     return _mm512_cmp_pd_mask(x, y, _CMP_GE_OQ) != 0;
   }
 
