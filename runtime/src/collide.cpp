@@ -365,6 +365,8 @@ struct Avx2 {
     return uint32_t(std::popcount(mask & ((1u << j) - 1)));
   }
 
+  // By reference: AVX vectors passed by value from a caller built without
+  // AVX change the ABI (clang refuses them).
   [[gnu::target("avx2")]] static bool any_at_least(const __m256d& x, const __m256d& y) {
     return _mm256_movemask_pd(_mm256_cmp_pd(x, y, _CMP_GE_OQ)) != 0;
   }
@@ -784,8 +786,8 @@ class PairFrame {
   // projections parent + offset[j] * scale)), the same bits as separation()
   // of each. A child with a lane of at least the least so far cannot lower
   // it and stops at that lane's chunk: most children then cost a chunk or
-  // two, not all of them and a reduction (a 6-6 miss's full separation took
-  // ~1.7x its test, session 37).
+  // two, not all of them and a reduction (a 6-6 miss's full separation: 1.3-1.4x
+  // its plain test, was 1.6-2.0x; bench_pair BM_Separation).
   template <int kTested>
   double least_separation(const double* parent, const Lanes* offset, uint32_t children, double scale,
                           const double* r, double least) const {
