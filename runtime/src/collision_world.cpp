@@ -988,7 +988,7 @@ void CollisionWorld::test_pairs(size_t begin, size_t end) {
       // may need no test. It is worth knowing only if it outlasts a step like
       // this one (the move since the last test); a pair whose separation did
       // not is not asked again for its next 8 tests, then 16, ... 128 (an
-      // ask costs up to about a test more).
+      // ask costs up to about 0.4 of a test more: bench_pair BM_Separation).
       if (tested.separation_rest > 0) {
         --tested.separation_rest;
         r.test = collide(pa, pb);
