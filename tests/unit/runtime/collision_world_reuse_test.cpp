@@ -9,6 +9,7 @@
 #include <memory>
 #include <tuple>
 
+#include "build_tree.h"
 #include "collision_world_util.h"
 
 namespace octbake {
@@ -223,6 +224,71 @@ TEST(Reuse, MissesKeptBySeparationGiveTheContactsOfFullTests) {
   EXPECT_GT(kept_apart, 0u);
   EXPECT_EQ(reused, 0u);  // every pose changed every frame
   EXPECT_LT(box_tests[1], box_tests[0]);
+}
+
+// The surface of the cube [-1, 1]^3 (12 triangles), baked at `depth`.
+ObjectTree cube_shell(int depth) {
+  Mesh mesh;
+  for (int i = 0; i < 8; ++i) mesh.positions.emplace_back(i & 1 ? 1 : -1, i & 2 ? 1 : -1, i & 4 ? 1 : -1);
+  for (int axis = 0; axis < 3; ++axis)
+    for (int side = 0; side < 2; ++side) {
+      // The four corners with coordinate `axis` on `side`, around the face.
+      const int bit = 1 << axis, u = 1 << ((axis + 1) % 3), v = 1 << ((axis + 2) % 3);
+      const uint32_t base = side ? bit : 0;
+      const uint32_t c[4] = {base, base | u, base | u | v, base | v};
+      mesh.triangles.push_back({c[0], c[1], c[2]});
+      mesh.triangles.push_back({c[0], c[2], c[3]});
+    }
+  return test::make_tree(build_tree(mesh, depth, Occupancy::surface));
+}
+
+// A miss whose test takes more than 128 box tests (a near miss: here a cube
+// close to the inside of a hollow one) waits 128 tests before its
+// separation is first asked for; a cheaper miss is asked at once. Both are
+// then kept apart while they slide less than their separation.
+TEST(Reuse, NearMissesAskForTheirSeparationAfterTheLongestWait) {
+  const ObjectTree shell = cube_shell(5), cube = solid_cube(4);
+  // The shell's wall leaves are 1/16 thick: inner faces at x = +-0.9375.
+  struct Case {
+    double x;            // the small cube's centre; it is 0.5 wide
+    bool near;           // its +x face 0.0075 from the wall's leaves
+  } cases[] = {{0.9375 - 0.0075 - 0.25, true}, {0.0, false}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.near ? "near" : "far");
+    CollisionSettings s;
+    s.bounds = {Eigen::Vector3d::Constant(-4), Eigen::Vector3d::Constant(4)};
+    s.world_depth = 2;
+    s.lod.policy = LodPolicy::fixed;
+    s.lod.max_depth = 5;
+    CollisionWorld world(s);
+    ASSERT_TRUE(world.create(TreeSource::fixed(&shell), Pose{}).ok());
+    Pose pose = at(c.x);
+    pose.position.y() = 0.01;  // its faces off the shell's box boundaries (a separation of 0 there)
+    pose.scale = 0.25;
+    const ObjectHandle small = *world.create(TreeSource::fixed(&cube), pose);
+    int first_kept = -1, kept = 0;
+    const int frames = 200;
+    for (int frame = 0; frame < frames; ++frame) {
+      std::vector<Contact> contacts;
+      const DetectStats stats = world.detect(contacts);
+      ASSERT_EQ(stats.pair_tests, 1u) << "frame " << frame;
+      ASSERT_TRUE(contacts.empty()) << "frame " << frame;
+      if (frame == 0) {
+        EXPECT_EQ(stats.box_tests > 128, c.near) << stats.box_tests;
+      }
+      if (stats.pairs_kept_apart == 1 && first_kept < 0) first_kept = frame;
+      kept += int(stats.pairs_kept_apart);
+      pose.position.y() += 1e-4;  // along the wall, 75 steps a gap
+      ASSERT_TRUE(world.set_pose(small, pose).ok());
+    }
+    if (c.near) {
+      // Frame 0 tests the new pair, frames 1..128 wait, 129 asks.
+      EXPECT_EQ(first_kept, 130);
+    } else {
+      EXPECT_EQ(first_kept, 2);  // frame 1 asks
+    }
+    EXPECT_GE(kept, (frames - first_kept) * 9 / 10);  // an ask now and then, in between kept apart
+  }
 }
 
 }  // namespace
