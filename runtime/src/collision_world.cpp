@@ -950,8 +950,8 @@ void CollisionWorld::assign_records() {
     if (r.record != kNone) free_records_.push_back(std::exchange(r.record, kNone));
 }
 
-// test_pairs' separation asks: the longest wait between two (tests), and
-// the box tests above which a miss counts as near (see there).
+// test_pairs' separation asks: the longest wait between two asks (in tests
+// of the pair), and the box tests above which a miss counts as near.
 constexpr uint8_t kLongestWait = 128;
 constexpr uint64_t kNearMissBoxTests = 128;
 

@@ -5,11 +5,11 @@
 // separation.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <bit>
 #include <memory>
 #include <tuple>
 
-#include "build_tree.h"
 #include "collision_world_util.h"
 
 namespace octbake {
@@ -226,20 +226,36 @@ TEST(Reuse, MissesKeptBySeparationGiveTheContactsOfFullTests) {
   EXPECT_LT(box_tests[1], box_tests[0]);
 }
 
-// The surface of the cube [-1, 1]^3 (12 triangles), baked at `depth`.
+// The hollow cube [-1, 1]^3 at `depth`: the leaves on its faces occupied (as
+// baking its 12 triangles with surface occupancy gives; built here, as the
+// runtime's tests do not link the baker).
 ObjectTree cube_shell(int depth) {
-  Mesh mesh;
-  for (int i = 0; i < 8; ++i) mesh.positions.emplace_back(i & 1 ? 1 : -1, i & 2 ? 1 : -1, i & 4 ? 1 : -1);
-  for (int axis = 0; axis < 3; ++axis)
-    for (int side = 0; side < 2; ++side) {
-      // The four corners with coordinate `axis` on `side`, around the face.
-      const int bit = 1 << axis, u = 1 << ((axis + 1) % 3), v = 1 << ((axis + 2) % 3);
-      const uint32_t base = side ? bit : 0;
-      const uint32_t c[4] = {base, base | u, base | u | v, base | v};
-      mesh.triangles.push_back({c[0], c[1], c[2]});
-      mesh.triangles.push_back({c[0], c[2], c[3]});
+  const uint32_t last = (1u << depth) - 1;
+  // Does the box at level d, coordinates c, hold a leaf on a face?
+  const auto on_face = [&](int d, const std::array<uint32_t, 3>& c) {
+    const int shift = depth - d;
+    for (uint32_t x : c)
+      if (x == 0 || ((x + 1) << shift) - 1 == last) return true;
+    return false;
+  };
+  OctreeMasks m;
+  m.bounds = {Eigen::Vector3d::Constant(-1), Eigen::Vector3d::Constant(1)};
+  std::vector<std::array<uint32_t, 3>> level = {{0, 0, 0}};  // occupied boxes, in the masks' order
+  for (int d = 0; d < depth; ++d) {
+    std::vector<uint8_t> masks;
+    std::vector<std::array<uint32_t, 3>> next;
+    for (const auto& c : level) {
+      uint8_t mask = 0;
+      for (uint32_t j = 0; j < 8; ++j) {
+        const std::array<uint32_t, 3> child = {2 * c[0] + (j & 1), 2 * c[1] + (j >> 1 & 1), 2 * c[2] + (j >> 2 & 1)};
+        if (on_face(d + 1, child)) mask |= uint8_t(1u << j), next.push_back(child);
+      }
+      masks.push_back(mask);
     }
-  return test::make_tree(build_tree(mesh, depth, Occupancy::surface));
+    m.masks.push_back(std::move(masks));
+    level = std::move(next);
+  }
+  return test::make_tree(std::move(m));
 }
 
 // A miss whose test takes more than 128 box tests (a near miss: here a cube
@@ -248,10 +264,13 @@ ObjectTree cube_shell(int depth) {
 // then kept apart while they slide less than their separation.
 TEST(Reuse, NearMissesAskForTheirSeparationAfterTheLongestWait) {
   const ObjectTree shell = cube_shell(5), cube = solid_cube(4);
+  const std::vector<OrientedBox> leaves = test::world_leaves(shell, Pose{}, 5);
+  ASSERT_EQ(leaves.size(), 32u * 32 * 32 - 30u * 30 * 30);
+  for (const OrientedBox& leaf : leaves) ASSERT_GT(leaf.center.cwiseAbs().maxCoeff(), 0.9);
   // The shell's wall leaves are 1/16 thick: inner faces at x = +-0.9375.
   struct Case {
-    double x;            // the small cube's centre; it is 0.5 wide
-    bool near;           // its +x face 0.0075 from the wall's leaves
+    double x;   // the small cube's centre; it is 0.5 wide
+    bool near;  // its +x face 0.0075 from the wall's leaves
   } cases[] = {{0.9375 - 0.0075 - 0.25, true}, {0.0, false}};
   for (const Case& c : cases) {
     SCOPED_TRACE(c.near ? "near" : "far");
@@ -278,7 +297,7 @@ TEST(Reuse, NearMissesAskForTheirSeparationAfterTheLongestWait) {
       }
       if (stats.pairs_kept_apart == 1 && first_kept < 0) first_kept = frame;
       kept += int(stats.pairs_kept_apart);
-      pose.position.y() += 1e-4;  // along the wall, 75 steps a gap
+      pose.position.y() += 1e-4;  // along the wall: the gap is 75 steps
       ASSERT_TRUE(world.set_pose(small, pose).ok());
     }
     if (c.near) {
